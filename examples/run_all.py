@@ -1,0 +1,35 @@
+"""Run every example as a user would (``python examples/NAME.py``); fail if one fails."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).parent
+TIME_LIMIT = 600
+
+
+def main() -> int:
+    failed = []
+    for script in sorted(HERE.glob("*.py")):
+        if script.name == Path(__file__).name:
+            continue
+        start = time.monotonic()
+        done = subprocess.run(
+            [sys.executable, str(script)], timeout=TIME_LIMIT, check=False, capture_output=True
+        )
+        took = time.monotonic() - start
+        status = "ok" if done.returncode == 0 else f"FAILED (exit {done.returncode})"
+        print(f"{script.name:28} {status:18} {took:6.1f} s")
+        if done.returncode != 0:
+            failed.append(script.name)
+            print(done.stdout.decode(errors="replace")[-3000:])
+            print(done.stderr.decode(errors="replace")[-3000:])
+    print(f"{len(failed)} failed: {failed}" if failed else "every example ran")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,88 @@
+"""pyrobots_aio: an asyncio-native executive for robots.
+
+Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
+
+1. ``_core``: clock, instrumentation (stdlib + anyio only)
+2. ``resources``, ``state``, ``poses``
+3. ``actions``, ``events``
+4. ``robot`` (the composition root)
+5. ``recording``, ``sim``, ``testing``, ``cli`` (public API only)
+"""
+
+from ._core._instrument import EventKind as EventKind
+from ._core._instrument import ExecEvent as ExecEvent
+from ._core._instrument import Instrument as Instrument
+from ._exceptions import ActionCancelled as ActionCancelled
+from ._exceptions import ActionDefinitionError as ActionDefinitionError
+from ._exceptions import ActionError as ActionError
+from ._exceptions import ActionInterrupted as ActionInterrupted
+from ._exceptions import ActionSkipped as ActionSkipped
+from ._exceptions import CorruptRecordingError as CorruptRecordingError
+from ._exceptions import InvalidConditionError as InvalidConditionError
+from ._exceptions import InvalidPoseError as InvalidPoseError
+from ._exceptions import InvalidResourceError as InvalidResourceError
+from ._exceptions import LockstepError as LockstepError
+from ._exceptions import LockUsageError as LockUsageError
+from ._exceptions import ModelLoadError as ModelLoadError
+from ._exceptions import PoseError as PoseError
+from ._exceptions import PyRobotsError as PyRobotsError
+from ._exceptions import RecordingError as RecordingError
+from ._exceptions import ResourceError as ResourceError
+from ._exceptions import RobotNotRunningError as RobotNotRunningError
+from ._exceptions import SimulationError as SimulationError
+from ._exceptions import SimulationUnavailableError as SimulationUnavailableError
+from ._exceptions import StateError as StateError
+from ._exceptions import TooManyActions as TooManyActions
+from ._exceptions import UnknownFrameError as UnknownFrameError
+from ._exceptions import UnknownStateKeyError as UnknownStateKeyError
+from .actions import Action as Action
+from .actions import ActionHandle as ActionHandle
+from .actions import ActionInfo as ActionInfo
+from .actions import ActionState as ActionState
+from .actions import BoundAction as BoundAction
+from .actions import Outcome as Outcome
+from .actions import action as action
+from .robot import Backend as Backend
+from .robot import GenericRobot as GenericRobot
+from .robot import Robot as Robot
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Action",
+    "ActionCancelled",
+    "ActionDefinitionError",
+    "ActionError",
+    "ActionHandle",
+    "ActionInfo",
+    "ActionInterrupted",
+    "ActionSkipped",
+    "ActionState",
+    "Backend",
+    "BoundAction",
+    "CorruptRecordingError",
+    "EventKind",
+    "ExecEvent",
+    "GenericRobot",
+    "Instrument",
+    "InvalidConditionError",
+    "InvalidPoseError",
+    "InvalidResourceError",
+    "LockUsageError",
+    "LockstepError",
+    "ModelLoadError",
+    "Outcome",
+    "PoseError",
+    "PyRobotsError",
+    "RecordingError",
+    "ResourceError",
+    "Robot",
+    "RobotNotRunningError",
+    "SimulationError",
+    "SimulationUnavailableError",
+    "StateError",
+    "TooManyActions",
+    "UnknownFrameError",
+    "UnknownStateKeyError",
+    "action",
+]

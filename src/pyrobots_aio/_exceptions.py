@@ -1,0 +1,189 @@
+"""The one exception hierarchy of pyrobots_aio.
+
+Every error the library raises on purpose is a `PyRobotsError`; messages name
+the bad value and say how to fix it.
+
+```
+PyRobotsError
+├── RobotNotRunningError          an action or monitor used with no running robot
+├── ActionError
+│   ├── ActionInterrupted         awaited action was cancelled (.reason, .by, .handle)
+│   ├── ActionSkipped             action did not run: a resource was busy
+│   ├── TooManyActions            Robot(max_actions=N) reached (.running)
+│   └── ActionDefinitionError     @action applied to something that is not an async def
+├── ResourceError
+│   ├── InvalidResourceError      not a resource, or a compound that contains itself
+│   └── LockUsageError            lock() misused (outside an action, re-entered, ...)
+├── StateError
+│   ├── UnknownStateKeyError      also a KeyError and an AttributeError
+│   └── InvalidConditionError     a monitor with no, two, or a mistyped condition
+├── PoseError
+│   ├── InvalidPoseError          also a ValueError
+│   └── UnknownFrameError         also a KeyError
+├── SimulationError
+│   ├── SimulationUnavailableError  mujoco is not installed
+│   ├── ModelLoadError            an MJCF file that does not load
+│   └── LockstepError             a lockstep robot outside the lockstep loop
+└── RecordingError
+    └── CorruptRecordingError     a recording line that cannot be read (.line)
+```
+
+`ActionCancelled` is not in this tree: it *is* `asyncio.CancelledError`
+(an alias), the exception that arrives inside a cancelled action.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+ActionCancelled = asyncio.CancelledError
+"""Raised inside a cancelled action at its next ``await``; it *is* ``asyncio.CancelledError``."""
+
+
+class PyRobotsError(Exception):
+    """Root of every error raised on purpose by pyrobots_aio."""
+
+
+class RobotNotRunningError(PyRobotsError):
+    """An action or monitor was used while its robot is not running."""
+
+
+class ActionError(PyRobotsError):
+    """Errors about actions."""
+
+
+class ActionInterrupted(ActionError):
+    """Raised when awaiting an action that was cancelled.
+
+    Attributes:
+        reason: The reason given to `ActionHandle.cancel`, or None.
+        by: The handle of the action that cancelled it, or None when the
+            cancellation came from outside any action.
+        handle: The handle of the interrupted action.
+    """
+
+    def __init__(self, handle: Any, reason: str | None, by: Any) -> None:
+        self.handle = handle
+        self.reason = reason
+        self.by = by
+        who = f" by {by.name}#{by.id}" if by is not None else ""
+        why = f": {reason}" if reason else ""
+        super().__init__(f"action {handle.name}#{handle.id} was cancelled{who}{why}")
+
+
+class ActionSkipped(ActionError):
+    """Raised when awaiting an action that did not run because a resource was busy.
+
+    Attributes:
+        resource: The busy resource.
+        holder: The handle of the action holding it (or None).
+        handle: The handle of the skipped action (None until attached).
+    """
+
+    def __init__(self, resource: Any, holder: Any, handle: Any = None) -> None:
+        self.resource = resource
+        self.holder = holder
+        self.handle = handle
+        owner = f"{holder.name}#{holder.id}" if holder is not None else "a queued request"
+        super().__init__(f"skipped: resource {resource.name!r} is busy (held by {owner})")
+
+
+class TooManyActions(ActionError):
+    """Raised when starting an action would exceed ``Robot(max_actions=N)``.
+
+    Attributes:
+        running: The handles of the actions running at that moment.
+    """
+
+    def __init__(self, name: str, limit: int, running: Sequence[Any]) -> None:
+        self.running = list(running)
+        shown = ", ".join(f"{h.name}#{h.id}" for h in self.running[:10])
+        more = f" and {len(self.running) - 10} more" if len(self.running) > 10 else ""
+        super().__init__(
+            f"cannot start {name!r}: {len(self.running)} actions already running "
+            f"(max_actions={limit}): {shown}{more}; raise max_actions or cancel some"
+        )
+
+
+class ActionDefinitionError(ActionError, TypeError):
+    """``@action`` was applied to something it cannot turn into an action."""
+
+
+class ResourceError(PyRobotsError):
+    """Errors about resources and locks."""
+
+
+class InvalidResourceError(ResourceError, TypeError):
+    """Something that is not a valid resource was given where one is needed."""
+
+
+class LockUsageError(ResourceError):
+    """``lock()`` was misused."""
+
+
+class StateError(PyRobotsError):
+    """Errors about the state store and monitors."""
+
+
+class UnknownStateKeyError(StateError, KeyError, AttributeError):
+    """A state key that does not exist; the message lists the closest keys."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class InvalidConditionError(StateError, ValueError):
+    """A monitor condition that is missing, duplicated or of the wrong type."""
+
+
+class PoseError(PyRobotsError):
+    """Errors about poses and frames."""
+
+
+class InvalidPoseError(PoseError, ValueError):
+    """A value that cannot be read as a pose; the message says what was expected."""
+
+
+class UnknownFrameError(PoseError, KeyError):
+    """A frame no provider knows; the message lists the known frames."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class SimulationError(PyRobotsError):
+    """Errors of the simulated robot."""
+
+
+class SimulationUnavailableError(SimulationError, ImportError):
+    """MuJoCo is not installed; install the ``sim`` extra."""
+
+
+class ModelLoadError(SimulationError):
+    """An MJCF model that does not load."""
+
+
+class LockstepError(SimulationError):
+    """A lockstep simulated robot was used outside the lockstep event loop."""
+
+
+class RecordingError(PyRobotsError):
+    """Errors reading or writing recordings."""
+
+
+class CorruptRecordingError(RecordingError):
+    """A recording line that cannot be read.
+
+    Attributes:
+        path: The recording file.
+        line: The 1-based line number of the bad line.
+    """
+
+    def __init__(self, path: str, line: int, problem: str) -> None:
+        self.path = path
+        self.line = line
+        super().__init__(f"{path}:{line}: {problem}")

@@ -1,0 +1,109 @@
+"""``@action``: turn ``async def f(robot, ...)`` into something that starts at once.
+
+Calling an action schedules it and returns an `ActionHandle` without blocking.
+``Action`` is also a descriptor, so ``@action`` methods on a ``Robot`` subclass
+bind like methods: ``robot.safe_walk(0.3)``.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from typing import TYPE_CHECKING, Any, Concatenate, Generic, ParamSpec, TypeVar, overload
+
+from .._exceptions import ActionDefinitionError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Coroutine
+
+    from ._executive import Executive
+    from ._handle import ActionHandle
+
+P = ParamSpec("P")
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def executive_of(robot: object, name: str) -> Executive:
+    """The executive of ``robot``, or a clear error naming what was passed instead."""
+    executive: Executive | None = getattr(robot, "_executive", None)
+    if executive is None:
+        msg = (
+            f"action {name!r} needs the robot as its first argument, got {robot!r}; "
+            f"call it as {name}(robot, ...) or robot.{name}(...)"
+        )
+        raise ActionDefinitionError(msg)
+    return executive
+
+
+class Action(Generic[R, P, T]):
+    """An action: an ``async def`` whose first parameter is the robot.
+
+    Created by `action`; calling it starts the action and returns its handle.
+    """
+
+    def __init__(self, fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]]) -> None:
+        if not inspect.iscoroutinefunction(fn):
+            msg = (
+                f"@action needs an 'async def' function taking the robot first, "
+                f"got {fn!r}; write 'async def {getattr(fn, '__name__', 'name')}(robot, ...)'"
+            )
+            raise ActionDefinitionError(msg)
+        self.fn = fn
+        self.name: str = getattr(fn, "__name__", repr(fn))
+        functools.update_wrapper(self, fn)
+
+    def __call__(self, robot: R, /, *args: P.args, **kwargs: P.kwargs) -> ActionHandle[T]:
+        return executive_of(robot, self.name).spawn(self.name, self.fn, (robot, *args), kwargs)
+
+    @overload
+    def __get__(self, instance: None, owner: type[Any]) -> Action[R, P, T]: ...
+
+    @overload
+    def __get__(self, instance: R, owner: type[Any]) -> BoundAction[P, T]: ...
+
+    def __get__(self, instance: R | None, owner: type[Any]) -> Action[R, P, T] | BoundAction[P, T]:
+        if instance is None:
+            return self
+        return BoundAction(self, instance)
+
+    def __repr__(self) -> str:
+        return f"<action {self.name}>"
+
+
+class BoundAction(Generic[P, T]):
+    """An action bound to a robot: ``robot.walk(0.2)`` starts it on that robot."""
+
+    __slots__ = ("action", "robot")
+
+    def __init__(self, action: Action[Any, P, T], robot: object) -> None:
+        self.action = action
+        self.robot = robot
+
+    def __call__(self, *args: P.args, **kwargs: P.kwargs) -> ActionHandle[T]:
+        return self.action(self.robot, *args, **kwargs)
+
+    @property
+    def __name__(self) -> str:
+        return self.action.name
+
+    def __repr__(self) -> str:
+        return f"<action {self.action.name} bound to {self.robot!r}>"
+
+
+def action(fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]]) -> Action[R, P, T]:
+    """Turn an ``async def`` taking the robot first into an action.
+
+    Example:
+        >>> from pyrobots_aio import Robot, action, ActionCancelled
+        >>> @action
+        ... async def safe_walk(robot: Robot, speed: float = 0.2) -> None:
+        ...     try:
+        ...         await robot.sleep(10)
+        ...     except ActionCancelled:
+        ...         await robot.sleep(0.1)  # cleanup may await
+        ...         raise
+        >>> safe_walk
+        <action safe_walk>
+    """
+    return Action(fn)

@@ -1,0 +1,300 @@
+"""The executive: starts actions as tasks, keeps their tree, cancels within a grace period.
+
+One `Executive` per robot. Running actions are kept in a dict by id (for
+introspection and ``max_actions``) and, at the top, in the robot's root scope.
+Cancellation is bounded by a watchdog: `cancel_grace` after a cancellation an
+action still running is cancelled again with a warning; after a second grace it
+is abandoned (reported as an ERROR) so that shutdown always completes.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections import deque
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import anyio
+
+from .._core._instrument import EventKind, ExecEvent, Instruments
+from .._exceptions import RobotNotRunningError, TooManyActions
+from ._context import current_action
+from ._handle import ActionHandle, Outcome, drive
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Coroutine, Iterable
+
+T = TypeVar("T")
+_log = logging.getLogger("pyrobots_aio.actions")
+
+_ESCALATE, _ABANDON = 1, 2
+
+
+class Executive:
+    """Runs the actions of one robot (its root scope, registry and cancellation watchdog)."""
+
+    def __init__(
+        self,
+        owner: object,
+        *,
+        max_actions: int | None = None,
+        cancel_grace: float = 2.0,
+        instruments: Instruments | None = None,
+    ) -> None:
+        if max_actions is not None and max_actions < 1:
+            msg = f"max_actions must be a positive integer or None, got {max_actions!r}"
+            raise ValueError(msg)
+        if not cancel_grace > 0:
+            msg = f"cancel_grace must be a positive number of seconds, got {cancel_grace!r}"
+            raise ValueError(msg)
+        self.owner = owner
+        self.max_actions = max_actions
+        self.cancel_grace = float(cancel_grace)
+        self.instruments = instruments if instruments is not None else Instruments()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._running: dict[int, ActionHandle[Any]] = {}
+        self._roots: dict[ActionHandle[Any], None] = {}
+        self._next_id = 1
+        self._watch: deque[tuple[float, int, ActionHandle[Any]]] = deque()
+        self._watch_timer: asyncio.TimerHandle | None = None
+
+    # -- lifecycle --------------------------------------------------------
+
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop:
+        """The loop the robot runs on."""
+        if self._loop is None:
+            msg = f"{self.owner!r} is not running; use 'async with robot:' first"
+            raise RobotNotRunningError(msg)
+        return self._loop
+
+    @property
+    def is_running(self) -> bool:
+        """Whether the robot is between ``__aenter__`` and the end of ``__aexit__``."""
+        return self._loop is not None
+
+    def open(self, loop: asyncio.AbstractEventLoop) -> None:
+        """Start accepting actions on ``loop``."""
+        self._loop = loop
+
+    async def close(self, reason: str) -> None:
+        """Cancel every action and wait, bounded by two graces, even if cancelled meanwhile."""
+        roots = list(self._roots)
+        for handle in roots:
+            handle.cancel(reason)
+        interrupted: BaseException | None = None
+        while any(not h.done() for h in roots):
+            try:
+                with anyio.CancelScope(shield=True):
+                    await self.wait_all(roots)
+            except asyncio.CancelledError as exc:  # finish the bounded shutdown, then re-raise
+                interrupted = exc
+        if self._watch_timer is not None:
+            self._watch_timer.cancel()
+            self._watch_timer = None
+        self._watch.clear()
+        self._loop = None
+        if interrupted is not None:
+            raise interrupted
+
+    # -- starting ---------------------------------------------------------
+
+    def spawn(
+        self,
+        name: str,
+        fn: Callable[..., Coroutine[Any, Any, T]],
+        args: tuple[Any, ...],
+        kwargs: dict[str, Any],
+    ) -> ActionHandle[T]:
+        """Start ``fn(*args, **kwargs)`` as an action now; return its handle without blocking."""
+        loop = self._loop
+        if loop is None:
+            msg = (
+                f"cannot start action {name!r}: {self.owner!r} is not running; "
+                "start it inside 'async with robot:'"
+            )
+            raise RobotNotRunningError(msg)
+        if self.max_actions is not None and len(self._running) >= self.max_actions:
+            raise TooManyActions(name, self.max_actions, list(self._running.values()))
+        parent = current_action.get()
+        if parent is not None and (parent._executive is not self or parent.done()):
+            parent = None
+        ident = self._next_id
+        self._next_id = ident + 1
+        handle: ActionHandle[T] = ActionHandle(self, ident, name, parent, loop.time())
+        coro = fn(*args, **kwargs)
+        handle._task = loop.create_task(drive(handle, coro), name=f"{name}#{ident}")
+        self._running[ident] = handle
+        if parent is None:
+            self._roots[handle] = None
+        else:
+            parent._children[handle] = None
+        if self.instruments:
+            self._emit(EventKind.ACTION_SPAWNED, handle, parent=parent.id if parent else None)
+        return handle
+
+    def started(self, handle: ActionHandle[Any]) -> None:
+        """Called by the action's task when its body starts."""
+        if self.instruments:
+            self._emit(EventKind.ACTION_STARTED, handle)
+
+    def finished(self, handle: ActionHandle[Any]) -> None:
+        """Called when an action is done: drop it from the registry and its scope."""
+        self._running.pop(handle.id, None)
+        parent = handle.parent
+        if parent is None:
+            self._roots.pop(handle, None)
+        else:
+            parent._children.pop(handle, None)
+        if self.instruments:
+            error = handle._error
+            self._emit(
+                EventKind.ACTION_FINISHED,
+                handle,
+                outcome=handle.outcome.value,
+                error=repr(error) if handle.outcome is Outcome.FAILED else None,
+            )
+
+    # -- cancelling -------------------------------------------------------
+
+    def cancel_tree(
+        self, handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
+    ) -> None:
+        """Cancel ``handle`` and every descendant it has now, recording who and why."""
+        stack = [handle]
+        while stack:
+            node = stack.pop()
+            stack.extend(node._children)
+            if node._cancel_requested or node.done():
+                continue
+            node._cancel_requested = True
+            node._cancel_reason = reason
+            node._cancel_by = by
+            node._interrupt()
+            self._watch_later(node, _ESCALATE)
+            if self.instruments:
+                self._emit(
+                    EventKind.CANCEL_REQUESTED,
+                    node,
+                    reason=reason,
+                    by=by.id if by is not None else None,
+                )
+
+    async def cancel_all(
+        self, reason: str | None = None, keep: Iterable[ActionHandle[Any]] = ()
+    ) -> None:
+        """Cancel every action except those in ``keep`` (and their ancestors); wait for them."""
+        spared = set(keep)
+        for handle in list(spared):
+            node = handle.parent
+            while node is not None:
+                spared.add(node)
+                node = node.parent
+        targets = self._outermost_except(spared)
+        for handle in targets:
+            handle.cancel(reason)
+        await self.wait_all(targets)
+
+    def _outermost_except(self, spared: set[ActionHandle[Any]]) -> list[ActionHandle[Any]]:
+        """The highest actions not spared: roots, or children of spared ancestors."""
+        found: list[ActionHandle[Any]] = []
+        stack = list(self._roots)
+        while stack:
+            node = stack.pop()
+            if node in spared:
+                stack.extend(node._children)
+            else:
+                found.append(node)
+        return found
+
+    async def reap_children(self, handle: ActionHandle[Any]) -> None:
+        """Cancel the children still running when ``handle``'s body ended; wait for them."""
+        while handle._children:
+            children = list(handle._children)
+            for child in children:
+                child.cancel(f"its parent {handle.name}#{handle.id} finished")
+            await self.wait_all(children)
+
+    async def wait_all(self, handles: Iterable[ActionHandle[Any]]) -> None:
+        """Wait until every handle is done (cancelling this wait does not cancel them)."""
+        pending = [h for h in handles if not h.done()]
+        if not pending:
+            return
+        fut = self.loop.create_future()
+        left = len(pending)
+
+        def one_done() -> None:
+            nonlocal left
+            left -= 1
+            if left == 0 and not fut.done():
+                fut.set_result(None)
+
+        for handle in pending:
+            handle.add_done_callback(one_done)
+        await fut
+
+    # -- the watchdog -----------------------------------------------------
+
+    def _watch_later(self, handle: ActionHandle[Any], stage: int) -> None:
+        loop = self.loop
+        deadline = loop.time() + self.cancel_grace
+        self._watch.append((deadline, stage, handle))
+        if self._watch_timer is None:
+            self._watch_timer = loop.call_at(deadline, self._watchdog)
+
+    def _watchdog(self) -> None:
+        self._watch_timer = None
+        loop = self.loop
+        now = loop.time()
+        watch = self._watch
+        while watch and watch[0][0] <= now:
+            _, stage, handle = watch.popleft()
+            if not handle.done():
+                self._overdue(handle, stage)
+        if watch:
+            self._watch_timer = loop.call_at(watch[0][0], self._watchdog)
+
+    def _overdue(self, handle: ActionHandle[Any], stage: int) -> None:
+        where = handle.location() or "an unknown place"
+        if stage == _ESCALATE:
+            _log.warning(
+                "action %s#%d still running %.3g s after cancellation, at %s; cancelling it again",
+                handle.name,
+                handle.id,
+                self.cancel_grace,
+                where,
+            )
+            handle._interrupt()
+            self._watch_later(handle, _ABANDON)
+            if self.instruments:
+                self._emit(EventKind.CANCEL_ESCALATED, handle, location=where)
+            return
+        _log.error(
+            "action %s#%d ignored cancellation for %.3g s, at %s; abandoning it (its task may "
+            "outlive the robot)",
+            handle.name,
+            handle.id,
+            2 * self.cancel_grace,
+            where,
+        )
+        if self.instruments:
+            self._emit(EventKind.ACTION_ABANDONED, handle, location=where)
+        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+        handle._complete()
+
+    # -- introspection ----------------------------------------------------
+
+    def running(self) -> list[ActionHandle[Any]]:
+        """Every action not yet done, in start order."""
+        return list(self._running.values())
+
+    def get(self, ident: int) -> ActionHandle[Any] | None:
+        """The running action with this id, or None."""
+        return self._running.get(ident)
+
+    def roots(self) -> list[ActionHandle[Any]]:
+        """The running actions of the root scope (started outside any action)."""
+        return list(self._roots)
+
+    def _emit(self, kind: EventKind, handle: ActionHandle[Any], **data: object) -> None:
+        self.instruments.emit(ExecEvent(kind, self.loop.time(), handle.id, handle.name, data))

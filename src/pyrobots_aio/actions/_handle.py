@@ -1,0 +1,389 @@
+"""ActionHandle: one running action, its outcome, and the task that drives it.
+
+The task runs `_drive`, which wraps the user's coroutine: it records the
+outcome, cancels and awaits the children still running when the body ends, runs
+the finalizers (resource release) and only then marks the handle done. The task
+itself always ends normally, so nothing leaks as "exception never retrieved".
+"""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+import logging
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from .._exceptions import ActionInterrupted, ActionSkipped
+from ._context import current_action
+from ._where import location
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Coroutine, Generator
+
+    from ._executive import Executive
+
+T = TypeVar("T")
+_log = logging.getLogger("pyrobots_aio.actions")
+
+_PENDING, _RUNNING, _FINISHING, _DONE = range(4)
+
+
+class Outcome(enum.Enum):
+    """How an action ended; ``NOT_DONE`` while it is pending, waiting or running."""
+
+    NOT_DONE = "not_done"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+    SKIPPED = "skipped"
+
+
+class ActionState(enum.Enum):
+    """Where an action is in its life, as `ActionInfo.state` reports it."""
+
+    PENDING = "pending"
+    """Started, its task not yet scheduled."""
+    WAITING = "waiting"
+    """Waiting for a resource."""
+    RUNNING = "running"
+    CANCELLING = "cancelling"
+    """Cancellation requested; its cleanup is running."""
+    FINISHING = "finishing"
+    """Its body has ended; its children are being cancelled and awaited."""
+    DONE = "done"
+
+
+_PHASE_STATES = {
+    _PENDING: ActionState.PENDING,
+    _FINISHING: ActionState.FINISHING,
+    _DONE: ActionState.DONE,
+}
+
+
+class ActionHandle(Generic[T]):
+    """A started action: await it for its result, cancel it, inspect it.
+
+    Example:
+        >>> async def main() -> None:  # doctest: +SKIP
+        ...     handle = robot.walk(0.2)      # scheduled at once, not awaited
+        ...     handle.cancel("bumper hit")   # returns at once
+        ...     outcome = await handle.wait_done()   # Outcome.CANCELLED, no raise
+    """
+
+    __slots__ = (
+        "__weakref__",
+        "_callbacks",
+        "_cancel_by",
+        "_cancel_reason",
+        "_cancel_requested",
+        "_children",
+        "_coro",
+        "_error",
+        "_executive",
+        "_finalizers",
+        "_outcome",
+        "_phase",
+        "_task",
+        "_value",
+        "_waiters",
+        "awaiting",
+        "finished_at",
+        "held",
+        "id",
+        "name",
+        "parent",
+        "spawned_at",
+        "started_at",
+    )
+
+    def __init__(
+        self,
+        executive: Executive,
+        ident: int,
+        name: str,
+        parent: ActionHandle[Any] | None,
+        spawned_at: float,
+    ) -> None:
+        self._executive = executive
+        self.id = ident
+        self.name = name
+        self.parent = parent
+        self.spawned_at = spawned_at
+        self.started_at: float | None = None
+        self.finished_at: float | None = None
+        self.held: tuple[str, ...] = ()
+        self.awaiting: tuple[str, ...] = ()
+        self._children: dict[ActionHandle[Any], None] = {}
+        self._task: asyncio.Task[None] | None = None
+        self._coro: Coroutine[Any, Any, T] | None = None
+        self._phase = _PENDING
+        self._outcome = Outcome.NOT_DONE
+        self._value: T | None = None
+        self._error: BaseException | None = None
+        self._cancel_requested = False
+        self._cancel_reason: str | None = None
+        self._cancel_by: ActionHandle[Any] | None = None
+        self._waiters: list[asyncio.Future[None]] | None = None
+        self._callbacks: list[Callable[[], None]] | None = None
+        self._finalizers: list[Callable[[], None]] | None = None
+
+    # -- awaiting ---------------------------------------------------------
+
+    def __await__(self) -> Generator[Any, None, T]:
+        return self._result_when_done().__await__()
+
+    async def _result_when_done(self) -> T:
+        await self.wait_done()
+        return self.result()
+
+    async def wait(self) -> T:
+        """Wait for the action and return its result (pyRobots' spelling of ``await handle``).
+
+        Raises:
+            ActionInterrupted: The action was cancelled.
+            ActionSkipped: The action did not run (a resource was busy).
+            Exception: Whatever the action raised.
+        """
+        return await self
+
+    async def wait_done(self) -> Outcome:
+        """Wait until the action is done and return its `Outcome`, never raising its error.
+
+        If the task waiting here is cancelled, the action is cancelled too: the
+        caller owns the deadline (``async with asyncio.timeout(2): await handle``).
+        """
+        if self._phase != _DONE:
+            fut = self._executive.loop.create_future()
+            if self._waiters is None:
+                self._waiters = []
+            self._waiters.append(fut)
+            try:
+                await fut
+            except asyncio.CancelledError:
+                self.cancel("the task awaiting it was cancelled")
+                raise
+        return self._outcome
+
+    # -- inspecting -------------------------------------------------------
+
+    @property
+    def outcome(self) -> Outcome:
+        """The outcome so far (`Outcome.NOT_DONE` until the action is done)."""
+        return self._outcome
+
+    @property
+    def state(self) -> ActionState:
+        """Where the action is now (pending, waiting, running, cancelling, finishing, done)."""
+        phase = self._phase
+        if phase != _RUNNING:
+            return _PHASE_STATES[phase]
+        if self._cancel_requested:
+            return ActionState.CANCELLING
+        return ActionState.WAITING if self.awaiting else ActionState.RUNNING
+
+    @property
+    def children(self) -> tuple[ActionHandle[Any], ...]:
+        """The children of this action that are still running, oldest first."""
+        return tuple(self._children)
+
+    @property
+    def cancel_reason(self) -> str | None:
+        """The reason given when cancellation was requested, or None."""
+        return self._cancel_reason
+
+    @property
+    def cancel_requested(self) -> bool:
+        """Whether cancellation of this action has been requested."""
+        return self._cancel_requested
+
+    def done(self) -> bool:
+        """Return True once the action has finished (any outcome), cleanup and children included."""
+        return self._phase == _DONE
+
+    def cancelled(self) -> bool:
+        """Return True if the action finished with outcome `Outcome.CANCELLED`."""
+        return self._outcome is Outcome.CANCELLED
+
+    def result(self) -> T:
+        """Return the result of a finished action, or raise what awaiting it would raise.
+
+        Raises:
+            asyncio.InvalidStateError: The action is not done yet.
+        """
+        error = self.exception()
+        if error is not None:
+            raise error
+        return self._value  # type: ignore[return-value]
+
+    def exception(self) -> BaseException | None:
+        """Return what awaiting the finished action would raise, or None if it succeeded.
+
+        Raises:
+            asyncio.InvalidStateError: The action is not done yet.
+        """
+        if self._phase != _DONE:
+            msg = f"action {self.name}#{self.id} is not done yet; await it or use wait_done()"
+            raise asyncio.InvalidStateError(msg)
+        return self._error
+
+    def childof(self, other: ActionHandle[Any]) -> bool:
+        """Return True if ``other`` is this action's parent or a further ancestor."""
+        node = self.parent
+        while node is not None:
+            if node is other:
+                return True
+            node = node.parent
+        return False
+
+    def location(self) -> str | None:
+        """Return the ``file:line`` where the action's body is now suspended, if it runs."""
+        if self._coro is None or self._phase != _RUNNING:
+            return None
+        return location(self._coro)
+
+    # -- cancelling -------------------------------------------------------
+
+    def cancel(self, reason: str | None = None) -> bool:
+        """Request cancellation of this action and its whole subtree; return at once.
+
+        The action sees `ActionCancelled` at its next ``await``; its cleanup may
+        await. Returns False if the action was already done.
+        """
+        if self._phase == _DONE:
+            return False
+        self._executive.cancel_tree(self, reason, current_action.get())
+        return True
+
+    # -- executive side ---------------------------------------------------
+
+    def add_finalizer(self, finalizer: Callable[[], None]) -> None:
+        """Run ``finalizer()`` when the action ends, after its children, before it is done.
+
+        The resources layer releases locks here, so a resource is held until the
+        action's cleanup and its children are over.
+        """
+        if self._finalizers is None:
+            self._finalizers = []
+        self._finalizers.append(finalizer)
+
+    def add_done_callback(self, callback: Callable[[], None]) -> None:
+        """Call ``callback()`` once the action is done (at once if it already is)."""
+        if self._phase == _DONE:
+            callback()
+            return
+        if self._callbacks is None:
+            self._callbacks = []
+        self._callbacks.append(callback)
+
+    def _interrupt(self) -> None:
+        """Throw `ActionCancelled` into the body at its current await, if the body runs.
+
+        A pending action is not touched: `drive` sees the request and never starts
+        the body; a finishing one only waits for its (cancelled) children.
+        """
+        if self._phase == _RUNNING and self._task is not None:
+            self._task.cancel(self._cancel_reason)
+
+    def _interrupted(self, cause: BaseException | None = None) -> ActionInterrupted:
+        error = ActionInterrupted(self, self._cancel_reason, self._cancel_by)
+        error.__cause__ = cause
+        return error
+
+    def _settle(
+        self, outcome: Outcome, value: Any = None, error: BaseException | None = None
+    ) -> None:
+        if self._phase == _DONE:  # abandoned by the watchdog: its outcome is already told
+            return
+        self._outcome = outcome
+        self._value = value
+        self._error = error
+
+    def _complete(self) -> None:
+        """Mark the action done and wake whoever waits for it (idempotent)."""
+        if self._phase == _DONE:
+            return
+        self._run_finalizers()
+        self._phase = _DONE
+        self._coro = None
+        self.finished_at = self._executive.loop.time()
+        waiting = False
+        if self._waiters is not None:
+            for fut in self._waiters:
+                if not fut.done():
+                    fut.set_result(None)
+                    waiting = True
+            self._waiters = None
+        if self._outcome is Outcome.FAILED and not waiting:
+            _log.error(
+                "action %s#%d failed and nobody is waiting for it",
+                self.name,
+                self.id,
+                exc_info=self._error,
+            )
+        self._executive.finished(self)
+        if self._callbacks is not None:
+            callbacks, self._callbacks = self._callbacks, None
+            for callback in callbacks:
+                callback()
+
+    def _run_finalizers(self) -> None:
+        if self._finalizers is None:
+            return
+        finalizers, self._finalizers = self._finalizers, None
+        for finalizer in reversed(finalizers):
+            try:
+                finalizer()
+            except Exception:
+                _log.exception("finalizer of action %s#%d failed", self.name, self.id)
+
+    def __repr__(self) -> str:
+        parent = f" parent={self.parent.name}#{self.parent.id}" if self.parent else ""
+        return f"<ActionHandle {self.name}#{self.id} {self.state.value}{parent}>"
+
+
+async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
+    """Run an action's body in its own task, then wind it up (the task's coroutine)."""
+    current_action.set(handle)
+    executive = handle._executive
+    if handle._cancel_requested:  # cancelled before it ever ran: the body never starts
+        coro.close()
+        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+    else:
+        handle._coro = coro
+        handle._phase = _RUNNING
+        handle.started_at = executive.loop.time()
+        executive.started(handle)
+        await _run_body(handle, coro)
+    handle._phase = _FINISHING
+    try:
+        if handle._children:
+            await executive.reap_children(handle)
+    finally:
+        handle._complete()
+
+
+async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
+    try:
+        value = await coro
+    except asyncio.CancelledError:
+        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+    except ActionSkipped as skipped:
+        skipped.handle = handle
+        handle._settle(Outcome.SKIPPED, error=skipped)
+    except Exception as exc:
+        if handle._cancel_requested:
+            _log.warning(
+                "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
+            )
+            handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
+        else:
+            handle._settle(Outcome.FAILED, error=exc)
+    except BaseException as exc:  # KeyboardInterrupt, SystemExit: record, then let through
+        handle._settle(Outcome.FAILED, error=exc)
+        handle._complete()
+        raise
+    else:
+        if handle._cancel_requested:  # cancellation swallowed: still CANCELLED
+            handle._settle(Outcome.CANCELLED, value, handle._interrupted())
+        else:
+            handle._settle(Outcome.SUCCEEDED, value)

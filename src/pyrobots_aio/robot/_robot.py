@@ -1,0 +1,218 @@
+"""Robot: the composition root, an async context manager around the executive.
+
+``async with Robot() as robot:`` opens the root scope, starts the backend, and
+on exit stops the monitors, cancels every action (bounded by ``cancel_grace``)
+and stops the backend, children before parents. Nothing starts in ``__init__``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import types
+from typing import TYPE_CHECKING, Any, Self
+
+from .._core._instrument import Instrument, Instruments
+from .._exceptions import ActionDefinitionError, ActionError, PyRobotsError
+from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
+from ..actions import render_tree as _render_tree
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from ..actions import ActionHandle
+    from ._backend import Backend
+
+_log = logging.getLogger("pyrobots_aio")
+
+SHUTDOWN_REASON = "robot shutting down"
+
+
+class Robot:
+    """A robot: runs actions, arbitrates resources, watches its state.
+
+    Args:
+        actions: Modules or action functions to attach: each becomes a bound
+            method of this robot (``robot.walk(0.2)``). Plain ``async def``
+            functions are made actions.
+        dummy: A flag subclasses read to skip real hardware (pyRobots' dummy mode).
+        max_actions: Most actions allowed to run at once (None: no limit).
+        cancel_grace: Seconds a cancelled action gets for its cleanup before it is
+            cancelled again; after a second grace it is abandoned.
+        instruments: Instruments receiving every executive event (recorders).
+        backend: The backend that connects this robot to hardware or a simulator.
+
+    Example:
+        >>> import asyncio
+        >>> from pyrobots_aio import Robot, action
+        >>> @action
+        ... async def double(robot: Robot, x: int) -> int:
+        ...     await robot.sleep(0.01)
+        ...     return 2 * x
+        >>> async def main() -> int:
+        ...     async with Robot(actions=[double]) as robot:
+        ...         return await robot.double(21)
+        >>> asyncio.run(main())
+        42
+    """
+
+    def __init__(
+        self,
+        *,
+        actions: Iterable[object] = (),
+        dummy: bool = False,
+        max_actions: int | None = None,
+        cancel_grace: float = 2.0,
+        instruments: Iterable[Instrument] = (),
+        backend: Backend | None = None,
+    ) -> None:
+        self._attached: dict[str, Action[Any, Any, Any]] = {}
+        self.dummy = dummy
+        self.instruments = Instruments()
+        for instrument in instruments:
+            self.instruments.add(instrument)
+        self._executive = Executive(
+            self, max_actions=max_actions, cancel_grace=cancel_grace, instruments=self.instruments
+        )
+        self.backend = backend
+        for item in actions:
+            self._attach(item)
+
+    # -- attaching actions ------------------------------------------------
+
+    def _attach(self, item: object) -> None:
+        if isinstance(item, types.ModuleType):
+            found = [v for v in vars(item).values() if isinstance(v, Action)]
+            if not found:
+                msg = f"module {item.__name__!r} defines no @action; nothing to attach"
+                raise ActionDefinitionError(msg)
+            for act in found:
+                self._attach_one(act)
+        elif isinstance(item, Action):
+            self._attach_one(item)
+        else:
+            self._attach_one(action(item))  # type: ignore[arg-type]
+
+    def _attach_one(self, act: Action[Any, Any, Any]) -> None:
+        if hasattr(type(self), act.name) or act.name in vars(self):
+            msg = f"cannot attach action {act.name!r}: {type(self).__name__} already has that name"
+            raise ActionDefinitionError(msg)
+        self._attached[act.name] = act
+
+    def __getattr__(self, name: str) -> BoundAction[..., Any]:
+        attached = self.__dict__.get("_attached", {})
+        if name in attached:
+            return BoundAction(attached[name], self)
+        msg = f"{type(self).__name__!r} has no attribute or action {name!r}"
+        if attached:
+            msg += f"; attached actions: {sorted(attached)}"
+        raise AttributeError(msg)
+
+    # -- lifecycle --------------------------------------------------------
+
+    @property
+    def is_running(self) -> bool:
+        """Whether the robot is running (inside ``async with robot``)."""
+        return self._executive.is_running
+
+    async def __aenter__(self) -> Self:
+        if self._executive.is_running:
+            msg = f"{self!r} is already running; enter 'async with robot:' once at a time"
+            raise PyRobotsError(msg)
+        self._executive.open(asyncio.get_running_loop())
+        try:
+            await self._start()
+        except BaseException:
+            await self._executive.close(SHUTDOWN_REASON)
+            raise
+        return self
+
+    async def __aexit__(self, *exc_info: object) -> None:
+        try:
+            await self._stop_monitoring()
+            await self._executive.close(SHUTDOWN_REASON)
+        finally:
+            await self._stop()
+
+    async def _start(self) -> None:
+        """Start what the robot owns (the backend); subclasses extend this."""
+        if self.backend is not None:
+            await self.backend.start(self)
+
+    async def _stop_monitoring(self) -> None:
+        """Stop event monitors before actions are cancelled; subclasses extend this."""
+
+    async def _stop(self) -> None:
+        """Stop the backend once every action is done; subclasses extend this."""
+        if self.backend is not None:
+            await self.backend.stop()
+
+    # -- actions ----------------------------------------------------------
+
+    async def sleep(self, seconds: float) -> None:
+        """Sleep ``seconds`` of the robot's clock (virtual time in lockstep simulation)."""
+        await asyncio.sleep(seconds)
+
+    def time(self) -> float:
+        """The robot's clock: the running loop's time (simulation time in lockstep)."""
+        return self._executive.loop.time()
+
+    async def cancel_all(self, reason: str | None = None) -> None:
+        """Cancel every running action and return once they are all done."""
+        await self._executive.cancel_all(reason)
+
+    async def cancel_all_others(self, reason: str | None = None) -> None:
+        """Cancel every action except the calling one and its ancestors; wait for them."""
+        me = current_action.get()
+        await self._executive.cancel_all(reason, keep=() if me is None else (me,))
+
+    def running(self) -> list[ActionInfo]:
+        """Snapshots of every action not yet done, in start order."""
+        return [ActionInfo.of(h) for h in self._executive.running()]
+
+    def actioninfo(self, ident: int) -> ActionInfo:
+        """The snapshot of the running action with this id.
+
+        Raises:
+            ActionError: No running action has this id.
+        """
+        handle = self._executive.get(ident)
+        if handle is None:
+            running = [h.id for h in self._executive.running()]
+            msg = f"no running action with id {ident!r}; running ids: {running[:20]}"
+            raise ActionError(msg)
+        return ActionInfo.of(handle)
+
+    def action_tree(self) -> str:
+        """The running actions as a printable tree (children indented under parents)."""
+        return _render_tree(self._executive.roots())
+
+    def handles(self) -> list[ActionHandle[Any]]:
+        """The handles of every action not yet done, in start order."""
+        return self._executive.running()
+
+    # -- logging ----------------------------------------------------------
+
+    def loglevel(self, level: int | str) -> None:
+        """Set the level of the ``pyrobots_aio`` logger (handlers are yours to add)."""
+        _log.setLevel(level)
+
+    def debug(self) -> None:
+        """Log everything the library says (``DEBUG``)."""
+        self.loglevel(logging.DEBUG)
+
+    def info(self) -> None:
+        """Log the library's ``INFO`` messages and above."""
+        self.loglevel(logging.INFO)
+
+    def silent(self) -> None:
+        """Log nothing from the library."""
+        self.loglevel(logging.CRITICAL + 1)
+
+    def __repr__(self) -> str:
+        state = "running" if self.is_running else "stopped"
+        return f"<{type(self).__name__} {state}{' dummy' if self.dummy else ''}>"
+
+
+GenericRobot = Robot
+"""pyRobots' name for the base robot class."""

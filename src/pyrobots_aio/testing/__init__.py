@@ -1,0 +1,1 @@
+"""Test support for robot behaviours: a pytest plugin, fixtures and assertions."""
