@@ -1,0 +1,437 @@
+"""The simulated world: MuJoCo physics, sensors, odometry and frames of the robot.
+
+`SimWorld` is the only object in pyrobots_aio that touches MuJoCo's ``MjModel``
+and ``MjData``. It knows nothing of asyncio: the simulated robot calls
+`SimWorld.step` (or `SimWorld.advance`) from its control loop and publishes
+`SimWorld.read_sensors` to ``robot.state``. (The module is a little over 400
+lines because it keeps every touch of ``MjData`` in one class.)
+
+Time is an integer count of physics steps (``data.time`` accumulates rounding
+error); `SimWorld.time` is ``steps * physics_dt``. After each call to
+``step`` the sensors, poses and frames describe the state at `SimWorld.time`.
+
+Determinism: MuJoCo is deterministic, and the only randomness is the IR noise
+(standard deviation ``ir_noise`` in the model, added only to readings that see
+something), drawn from a generator seeded with ``seed``. The same seed and the
+same calls give bit-identical trajectories and readings. How the steps are
+batched (``step(10)`` or ten ``step(1)``) does not change the physics; the
+odometry, like a robot's firmware, integrates the encoders once per call (as a
+circular arc), so it differs by micrometres.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import ModelLoadError, SimulationUnavailableError, UnknownFrameError
+from ._models import ModelLayout
+from ._models import model_path as _default_model_path
+
+if TYPE_CHECKING:
+    from types import ModuleType
+
+    from numpy.typing import NDArray
+
+__all__ = ["SimWorld"]
+
+_log = logging.getLogger("pyrobots_aio.sim")
+
+_HOME_KEYFRAME = "home"
+
+
+def _import_mujoco() -> ModuleType:
+    try:
+        import mujoco
+    except ImportError as err:
+        raise SimulationUnavailableError(
+            f"the simulated robot needs MuJoCo, which cannot be imported ({err}); "
+            'install it with: pip install "pyrobots-aio[sim]"'
+        ) from err
+    module: ModuleType = mujoco
+    return module
+
+
+def _load(mujoco: ModuleType, path: Path) -> Any:
+    if not path.is_file():
+        raise ModelLoadError(f"cannot load the MuJoCo model {str(path)!r}: no such file")
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except (ValueError, mujoco.FatalError) as err:
+        problem = str(err).strip()
+        raise ModelLoadError(f"cannot load the MuJoCo model {str(path)!r}: {problem}") from err
+
+
+def _wrap_angle(angle: float) -> float:
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def _yaw(qw: float, qx: float, qy: float, qz: float) -> float:
+    return math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+
+
+def _planar(x: float, y: float, yaw: float) -> NDArray[np.float64]:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def _matrix(pos: NDArray[np.float64], rot: NDArray[np.float64]) -> NDArray[np.float64]:
+    out = np.eye(4)
+    out[:3, :3] = rot.reshape(3, 3)
+    out[:3, 3] = pos
+    return out
+
+
+class _Odometry:
+    """Dead reckoning from the wheel encoders, as the robot's firmware does it."""
+
+    __slots__ = ("_left", "_radius", "_right", "_track", "x", "y", "yaw")
+
+    def __init__(self, radius: float, track: float, left: float, right: float) -> None:
+        self._radius, self._track = radius, track
+        self.reset(left, right)
+
+    def reset(self, left: float, right: float) -> None:
+        self.x = self.y = self.yaw = 0.0
+        self._left, self._right = left, right
+
+    def update(self, left: float, right: float) -> None:
+        d_left = (left - self._left) * self._radius
+        d_right = (right - self._right) * self._radius
+        self._left, self._right = left, right
+        distance = (d_left + d_right) / 2
+        turn = (d_right - d_left) / self._track
+        # Exact for a circular arc: the chord, along the mean heading.
+        chord = distance if abs(turn) < 1e-12 else 2 * distance / turn * math.sin(turn / 2)
+        heading = self.yaw + turn / 2
+        self.x += chord * math.cos(heading)
+        self.y += chord * math.sin(heading)
+        self.yaw = _wrap_angle(self.yaw + turn)
+
+
+class SimWorld:
+    """The MuJoCo simulation of the differential-drive robot in its arena.
+
+    Args:
+        model_path: An MJCF file; by default the shipped ``models/scene.xml``.
+            Another model must contain the robot of ``models/robot.xml`` (the
+            simulator finds its parts by name) and a dock (``arena.xml``).
+        seed: Seeds the IR noise; the same seed and calls give the same run.
+        physics_dt: The physics step in seconds (overrides the model's).
+
+    Raises:
+        SimulationUnavailableError: MuJoCo is not installed.
+        ModelLoadError: The model does not load, or lacks a part the simulator
+            needs; the message names the file and the problem.
+        ValueError: ``physics_dt`` is not a positive number.
+
+    Example:
+        >>> world = SimWorld(seed=1)
+        >>> world.set_command(0.2, 0.0)
+        >>> world.advance(1.0)
+        500
+        >>> round(world.odom_pose()[0], 1)
+        0.2
+    """
+
+    def __init__(
+        self, model_path: str | Path | None = None, *, seed: int = 0, physics_dt: float = 0.002
+    ) -> None:
+        if not (math.isfinite(physics_dt) and physics_dt > 0):
+            raise ValueError(f"physics_dt must be a positive number of seconds, not {physics_dt!r}")
+        mujoco = _import_mujoco()
+        path = Path(model_path) if model_path is not None else _default_model_path()
+        model = _load(mujoco, path)
+        model.opt.timestep = physics_dt
+        self._layout = ModelLayout.from_model(mujoco, model, str(path))
+        self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
+        self._mujoco, self._model, self._data = mujoco, model, mujoco.MjData(model)
+        self._path, self._seed, self._dt = path, seed, physics_dt
+        self._reset_to_home()
+        self._sensordata = self._data.sensordata  # a view: stays current after each step
+        self._rng = np.random.default_rng(seed)
+        self._steps = 0
+        self._command = (0.0, 0.0)
+        self._battery = 1.0
+        left, right = self._encoders()
+        self._odometry = _Odometry(self._layout.wheel_radius, self._layout.track, left, right)
+        _log.debug(
+            "loaded %s: %d IR and %d cliff sensors, seed %d",
+            path,
+            len(self._layout.ir),
+            len(self._layout.cliffs),
+            seed,
+        )
+
+    def __repr__(self) -> str:
+        return f"<SimWorld {self._path.name} seed={self._seed} t={self.time:.3f}s>"
+
+    @property
+    def model_path(self) -> Path:
+        """The MJCF file the world was loaded from."""
+        return self._path
+
+    @property
+    def seed(self) -> int:
+        """The seed of the IR noise."""
+        return self._seed
+
+    @property
+    def physics_dt(self) -> float:
+        """The physics step, in seconds."""
+        return self._dt
+
+    @property
+    def steps(self) -> int:
+        """The number of physics steps taken since construction."""
+        return self._steps
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds since construction: ``steps * physics_dt``."""
+        return self._steps * self._dt
+
+    @property
+    def command(self) -> tuple[float, float]:
+        """The velocity command in force, ``(v, w)``, after speed limiting."""
+        return self._command
+
+    @property
+    def state_keys(self) -> tuple[str, ...]:
+        """The keys of `read_sensors`, in the order it returns them."""
+        return self._layout.state_keys
+
+    @property
+    def frame_names(self) -> tuple[str, ...]:
+        """The frames of `frame_transforms`, in the order it returns them."""
+        return ("odom", "base_link", *self._layout.frame_sites)
+
+    # --- commands and time ----------------------------------------------------------
+
+    def set_command(self, v: float, w: float) -> None:
+        """Drive at linear speed ``v`` (m/s) and angular speed ``w`` (rad/s).
+
+        The wheel speeds follow from the wheel radius and track. A command that
+        needs a wheel faster than its top speed is scaled down as a whole, so the
+        robot keeps the commanded curvature; `command` reports the result.
+
+        Raises:
+            ValueError: ``v`` or ``w`` is not a finite number.
+        """
+        if not (math.isfinite(v) and math.isfinite(w)):
+            raise ValueError(f"the velocity command must be finite numbers, not v={v!r}, w={w!r}")
+        layout = self._layout
+        half_track = layout.track / 2
+        left = (v - w * half_track) / layout.wheel_radius
+        right = (v + w * half_track) / layout.wheel_radius
+        fastest = max(abs(left), abs(right))
+        if fastest > layout.max_wheel_speed:
+            scale = layout.max_wheel_speed / fastest
+            left, right, v, w = left * scale, right * scale, v * scale, w * scale
+        self._data.ctrl[layout.actuators[0]] = left
+        self._data.ctrl[layout.actuators[1]] = right
+        self._command = (v, w)
+
+    def stop(self) -> None:
+        """Command zero speed: the wheel servos brake the robot to a halt."""
+        self.set_command(0.0, 0.0)
+
+    def step(self, n: int = 1) -> None:
+        """Advance the physics by ``n`` steps of `physics_dt`.
+
+        Raises:
+            ValueError: ``n`` is negative.
+        """
+        if n < 0:
+            raise ValueError(f"cannot step a negative number of physics steps ({n})")
+        if n == 0:
+            return
+        self._mujoco.mj_step(self._model, self._data, nstep=n)
+        # mj_step computes sensors and poses before integrating; recompute them for
+        # the new state (this does not change the physics that follows).
+        self._mujoco.mj_forward(self._model, self._data)
+        self._steps += n
+        self._odometry.update(*self._encoders())
+        self._update_battery(n * self._dt)
+
+    def advance(self, dt: float) -> int:
+        """Advance the physics by ``dt`` seconds and return the steps taken.
+
+        Raises:
+            ValueError: ``dt`` is negative or not a whole number of physics steps.
+        """
+        n = round(dt / self._dt)
+        if n < 0 or not math.isclose(n * self._dt, dt, rel_tol=1e-9, abs_tol=1e-12):
+            raise ValueError(
+                f"dt={dt!r} s is not a whole, non-negative number of physics steps "
+                f"of {self._dt} s; use a multiple of physics_dt"
+            )
+        self.step(n)
+        return n
+
+    def place(self, x: float, y: float, yaw: float) -> None:
+        """Put the robot down at rest at ``(x, y, yaw)`` in the map frame.
+
+        For setting up scenarios and tests: the robot is put down as it rests
+        at the start (same height and tilt), with no speed. Odometry restarts
+        there (the ``odom`` frame moves to the new pose); the command, time and
+        battery are kept.
+
+        Raises:
+            ValueError: A coordinate is not a finite number.
+        """
+        if not all(math.isfinite(value) for value in (x, y, yaw)):
+            raise ValueError(f"the pose must be finite numbers, not x={x!r}, y={y!r}, yaw={yaw!r}")
+        layout, data, mujoco = self._layout, self._data, self._mujoco
+        qpos = layout.free_qpos
+        data.qpos[qpos : qpos + 3] = (x, y, self._rest_z)
+        heading = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+        mujoco.mju_mulQuat(data.qpos[qpos + 3 : qpos + 7], heading, self._rest_tilt)
+        data.qvel[:] = 0.0
+        self._mujoco.mj_forward(self._model, data)
+        self._odometry.reset(*self._encoders())
+
+    # --- sensors ---------------------------------------------------------------------
+
+    def read_sensors(self) -> dict[str, object]:
+        """Return every sensor reading, keyed as in ``robot.state``.
+
+        Keys (see `state_keys`): ``bumper``, ``bumper_left``, ``bumper_right``
+        (bool); ``ir_<position>`` (float, m: the sensor's range when nothing is
+        in range); ``cliff_<position>`` (bool: True over a cliff); ``docked``
+        (bool); ``v`` (m/s) and ``w`` (rad/s), measured at the wheels;
+        ``encoder_left``, ``encoder_right`` (rad); ``imu_gyro_z`` (rad/s);
+        ``imu_acc_x``, ``imu_acc_y`` (m/s^2, body frame); ``battery`` (0 to 1).
+        """
+        layout, s = self._layout, self._sensordata.tolist()
+        left = s[layout.bumpers[0]] > layout.bumper_threshold
+        right = s[layout.bumpers[1]] > layout.bumper_threshold
+        state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
+        state["bumper_right"] = right
+        noise = self._rng.normal(0.0, layout.ir_noise, len(layout.ir)).tolist()
+        for (key, index, limit), error in zip(layout.ir, noise, strict=True):
+            distance = s[index]
+            seen = 0.0 <= distance < limit
+            state[key] = min(max(distance + error, 0.0), limit) if seen else limit
+        for key, index in layout.cliffs:
+            distance = s[index]
+            state[key] = distance < 0.0 or distance > layout.cliff_threshold
+        state["docked"] = self._docked(s)
+        wheel_left, wheel_right = s[layout.wheel_vels[0]], s[layout.wheel_vels[1]]
+        state["v"] = layout.wheel_radius * (wheel_left + wheel_right) / 2
+        state["w"] = layout.wheel_radius * (wheel_right - wheel_left) / layout.track
+        state["encoder_left"] = s[layout.encoders[0]]
+        state["encoder_right"] = s[layout.encoders[1]]
+        state["imu_gyro_z"] = s[layout.gyro_z]
+        state["imu_acc_x"] = s[layout.acc_xy[0]]
+        state["imu_acc_y"] = s[layout.acc_xy[1]]
+        state["battery"] = self._battery
+        return state
+
+    # --- poses and frames ------------------------------------------------------------
+
+    def base_pose(self) -> tuple[float, float, float]:
+        """Return the robot's true pose ``(x, y, yaw)`` in the map frame (m, rad)."""
+        body = self._layout.base_body
+        x, y, _ = self._data.xpos[body].tolist()
+        return x, y, _yaw(*self._data.xquat[body].tolist())
+
+    def odom_pose(self) -> tuple[float, float, float]:
+        """Return the pose ``(x, y, yaw)`` dead-reckoned from the wheel encoders.
+
+        It is in the ``odom`` frame, which starts at the robot's start pose (or
+        its last `place`); wheel slip makes it drift from `base_pose`.
+        """
+        odometry = self._odometry
+        return odometry.x, odometry.y, odometry.yaw
+
+    def frame_transforms(self) -> dict[str, NDArray[np.float64]]:
+        """Return every frame as a 4x4 homogeneous transform to the map frame.
+
+        Frames: ``odom`` (placed, as ROS REP 105 has it, so that ``base_link``
+        seen from ``odom`` is the dead-reckoned `odom_pose`), ``base_link`` (the
+        true pose, on the floor under the wheel axle), one frame per sensor
+        site of the robot (``ir_<position>``, ``cliff_<position>``,
+        ``bumper_left``, ``bumper_right``, ``imu``, ``charge_contacts``) and
+        ``dock`` (on the floor at the dock's face, x into the room).
+        """
+        sites = self._layout.frame_sites
+        indices = self._site_indices
+        stacked = np.zeros((len(indices), 4, 4))
+        stacked[:, :3, :3] = self._data.site_xmat[indices].reshape(-1, 3, 3)
+        stacked[:, :3, 3] = self._data.site_xpos[indices]
+        stacked[:, 3, 3] = 1.0
+        frames = {"odom": self._odom_in_map(), "base_link": self._base_in_map()}
+        frames.update(zip(sites, stacked, strict=True))
+        return frames
+
+    def frame_transform(self, frame: str) -> NDArray[np.float64]:
+        """Return one frame of `frame_transforms` as a 4x4 transform to the map frame.
+
+        Raises:
+            UnknownFrameError: The world has no such frame.
+        """
+        if frame == "odom":
+            return self._odom_in_map()
+        if frame == "base_link":
+            return self._base_in_map()
+        index = self._layout.frame_sites.get(frame)
+        if index is None:
+            raise UnknownFrameError(
+                f"unknown frame {frame!r}; known frames: {sorted(self.frame_names)}"
+            )
+        return _matrix(self._data.site_xpos[index], self._data.site_xmat[index])
+
+    # --- internals -------------------------------------------------------------------
+
+    def _reset_to_home(self) -> None:
+        mujoco, model, data = self._mujoco, self._model, self._data
+        key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, _HOME_KEYFRAME)
+        if key >= 0:
+            mujoco.mj_resetDataKeyframe(model, data, key)
+        mujoco.mj_forward(model, data)
+        # How the robot rests on the floor (its height, and its tilt onto the
+        # caster with the heading taken out), so that `place` puts it down settled.
+        qpos = self._layout.free_qpos
+        self._rest_z = float(data.qpos[qpos + 2])
+        yaw = _yaw(*data.qpos[qpos + 3 : qpos + 7].tolist())
+        unturn = np.array([math.cos(yaw / 2), 0.0, 0.0, -math.sin(yaw / 2)])
+        self._rest_tilt = np.empty(4)
+        mujoco.mju_mulQuat(self._rest_tilt, unturn, data.qpos[qpos + 3 : qpos + 7])
+
+    def _encoders(self) -> tuple[float, float]:
+        left, right = self._layout.encoders
+        return float(self._sensordata[left]), float(self._sensordata[right])
+
+    def _docked(self, s: list[float]) -> bool:
+        start = self._layout.dock_contact
+        px, py, pz = s[start : start + 3]
+        hx, hy, hz = self._layout.dock_pad
+        return abs(px) <= hx and abs(py) <= hy and abs(pz) <= hz
+
+    def _update_battery(self, elapsed: float) -> None:
+        layout = self._layout
+        if self._docked(self._sensordata.tolist()):
+            self._battery = min(1.0, self._battery + elapsed / layout.battery_charge_time)
+        else:
+            self._battery = max(0.0, self._battery - elapsed / layout.battery_runtime)
+
+    def _base_in_map(self) -> NDArray[np.float64]:
+        body = self._layout.base_body
+        return _matrix(self._data.xpos[body], self._data.xmat[body])
+
+    def _odom_in_map(self) -> NDArray[np.float64]:
+        # map->odom = map->base (truth) composed with the inverse of odom->base
+        # (dead reckoning), both in the floor plane: rotate by the yaw difference,
+        # then put the dead-reckoned position onto the true one.
+        x, y, yaw = self.base_pose()
+        odometry = self._odometry
+        turn = yaw - odometry.yaw
+        c, s = math.cos(turn), math.sin(turn)
+        return _planar(
+            x - c * odometry.x + s * odometry.y, y - s * odometry.x - c * odometry.y, turn
+        )

@@ -1,0 +1,389 @@
+"""SimWorld against real MuJoCo: motion, sensors, odometry, frames, determinism, errors."""
+
+from __future__ import annotations
+
+import math
+import sys
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pytest
+
+from pyrobots_aio import ModelLoadError, SimulationUnavailableError, UnknownFrameError
+from pyrobots_aio.sim._models import model_path, models_dir
+from pyrobots_aio.sim._world import SimWorld
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+IR_KEYS = [
+    "ir_side_left",
+    "ir_left",
+    "ir_front_left",
+    "ir_front_center_left",
+    "ir_front_center_right",
+    "ir_front_right",
+    "ir_right",
+]
+CLIFF_KEYS = ["cliff_front_left", "cliff_front_right", "cliff_side_left", "cliff_side_right"]
+IR_RANGE = 0.4
+TICK = 0.02  # the 50 Hz control tick of the simulated robot
+EAST_WALL_X = 2.0
+
+
+@pytest.fixture
+def world() -> SimWorld:
+    return SimWorld()
+
+
+def drive(world: SimWorld, v: float, w: float, seconds: float) -> None:
+    world.set_command(v, w)
+    world.step(round(seconds / world.physics_dt))
+
+
+def drive_until_bumper(world: SimWorld, v: float, limit: float = 4.0) -> list[dict[str, object]]:
+    """Drive at ``v``, reading the sensors every tick, until the bumper is pressed."""
+    world.set_command(v, 0.0)
+    readings: list[dict[str, object]] = []
+    while world.time < limit:
+        world.advance(TICK)
+        readings.append(world.read_sensors())
+        if readings[-1]["bumper"]:
+            return readings
+    pytest.fail(f"the bumper never pressed in {limit} s")
+
+
+def test_read_sensors_has_exactly_the_state_keys() -> None:
+    world = SimWorld()
+    state = world.read_sensors()
+    assert list(state) == [
+        "bumper",
+        "bumper_left",
+        "bumper_right",
+        *IR_KEYS,
+        *CLIFF_KEYS,
+        "docked",
+        "v",
+        "w",
+        "encoder_left",
+        "encoder_right",
+        "imu_gyro_z",
+        "imu_acc_x",
+        "imu_acc_y",
+        "battery",
+    ]
+    assert list(state) == list(world.state_keys)
+    bools = ["bumper", "bumper_left", "bumper_right", *CLIFF_KEYS, "docked"]
+    assert all(type(state[key]) is bool for key in bools)
+    assert all(type(state[key]) is float for key in state if key not in bools)
+
+
+def test_starts_docked_at_rest_facing_away_from_the_dock(world: SimWorld) -> None:
+    state = world.read_sensors()
+    assert state["docked"] is True
+    assert state["bumper"] is False
+    assert (state["v"], state["w"], state["battery"]) == (0.0, 0.0, 1.0)
+    x, y, yaw = world.base_pose()
+    assert (x, y, yaw) == pytest.approx((-1.728, 0.0, 0.0), abs=1e-6)
+    dock = world.frame_transform("dock")
+    np.testing.assert_allclose(dock[:3, 3], [-1.9, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(dock[:3, 0], [1.0, 0.0, 0.0], atol=1e-9)  # x into the room
+
+
+def test_open_space_reads_ir_range_and_no_cliff(world: SimWorld) -> None:
+    drive(world, 0.2, 0.0, 1.0)
+    state = world.read_sensors()
+    assert [state[key] for key in IR_KEYS] == [IR_RANGE] * len(IR_KEYS)
+    assert [state[key] for key in CLIFF_KEYS] == [False] * len(CLIFF_KEYS)
+
+
+def test_drives_straight_at_the_commanded_speed(world: SimWorld) -> None:
+    x0, y0, _ = world.base_pose()
+    drive(world, 0.2, 0.0, 2.0)
+    x, y, yaw = world.base_pose()
+    assert x - x0 == pytest.approx(0.4, rel=0.03)
+    assert abs(y - y0) < 1e-3
+    assert abs(yaw) < math.radians(0.5)
+    state = world.read_sensors()
+    assert state["v"] == pytest.approx(0.2, rel=0.01)
+    assert state["w"] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_turns_in_place(world: SimWorld) -> None:
+    drive(world, 0.2, 0.0, 1.0)  # off the dock first
+    world.stop()
+    world.advance(0.2)
+    x0, y0, yaw0 = world.base_pose()
+    world.set_command(0.0, 1.0)
+    world.advance(0.5)
+    assert world.read_sensors()["w"] == pytest.approx(1.0, rel=0.01)
+    assert world.read_sensors()["imu_gyro_z"] == pytest.approx(1.0, rel=0.01)
+    world.step(round((math.pi / 2 - 0.5) / world.physics_dt))
+    world.stop()
+    world.advance(0.2)
+    x, y, yaw = world.base_pose()
+    assert math.degrees(yaw - yaw0) == pytest.approx(90.0, abs=3.0)
+    assert math.hypot(x - x0, y - y0) < 0.01
+
+
+def test_speed_is_limited_keeping_the_curvature(world: SimWorld) -> None:
+    world.set_command(1.0, 2.0)
+    v, w = world.command
+    assert w / v == pytest.approx(2.0)
+    top_wheel_speed = v + w * 0.235 / 2  # the outer wheel, in m/s
+    assert top_wheel_speed == pytest.approx(8.5 * 0.036)
+
+
+def test_head_on_wall_presses_both_sides_and_ir_falls(world: SimWorld) -> None:
+    world.place(1.5, 0.0, 0.0)
+    readings = drive_until_bumper(world, 0.15)
+    assert (readings[-1]["bumper_left"], readings[-1]["bumper_right"]) == (True, True)
+    center = [r["ir_front_center_left"] for r in readings[::10]]
+    assert center == sorted(center, reverse=True)
+    assert len(set(center)) == len(center)
+    assert center[0] < IR_RANGE
+    assert all(not r["bumper"] for r in readings[:-1])
+
+
+def test_ir_reads_the_distance_to_the_wall(world: SimWorld) -> None:
+    world.place(1.6, 0.0, 0.0)
+    world.advance(TICK)
+    # ir_front_center_left: 165 mm out at +5 degrees, looking along +5 degrees.
+    angle = math.radians(5.0)
+    expected = (EAST_WALL_X - 1.6 - 0.165 * math.cos(angle)) / math.cos(angle)
+    assert world.read_sensors()["ir_front_center_left"] == pytest.approx(expected, abs=0.01)
+
+
+@pytest.mark.parametrize(("heading_deg", "side"), [(30.0, "bumper_right"), (-30.0, "bumper_left")])
+def test_angled_hit_presses_the_side_that_touches(
+    world: SimWorld, heading_deg: float, side: str
+) -> None:
+    # Heading left of the wall's normal, the robot meets the wall on its right.
+    world.place(1.5, 0.0, math.radians(heading_deg))
+    state = drive_until_bumper(world, 0.15)[-1]
+    other = "bumper_left" if side == "bumper_right" else "bumper_right"
+    assert (state[side], state[other]) == (True, False)
+
+
+def test_bumper_releases_when_the_robot_stops_pushing(world: SimWorld) -> None:
+    world.place(1.5, 0.0, 0.0)
+    drive_until_bumper(world, 0.15)
+    world.stop()
+    world.advance(0.5)
+    assert world.read_sensors()["bumper"] is False
+
+
+def test_leaving_and_backing_into_the_dock(world: SimWorld) -> None:
+    drive(world, 0.1, 0.0, 1.0)
+    assert world.read_sensors()["docked"] is False
+    drive(world, -0.1, 0.0, 1.5)
+    state = world.read_sensors()
+    assert state["docked"] is True
+    assert state["bumper"] is False  # the back of the robot has no bumper
+
+
+def test_battery_drains_away_from_the_dock_and_charges_on_it(world: SimWorld) -> None:
+    drive(world, 0.1, 0.0, 1.0)
+    away = world.read_sensors()["battery"]
+    assert away == pytest.approx(1.0 - 1.0 / 7200, abs=1e-3 / 7200)
+    drive(world, -0.1, 0.0, 1.5)
+    world.advance(10.0)
+    assert world.read_sensors()["battery"] > away
+
+
+def test_odometry_follows_ground_truth(world: SimWorld) -> None:
+    x0, y0, yaw0 = world.base_pose()
+    drive(world, 0.2, 0.5, 2.0)
+    drive(world, 0.15, -0.3, 1.0)
+    x, y, yaw = world.base_pose()
+    c, s = math.cos(-yaw0), math.sin(-yaw0)
+    truth = (c * (x - x0) - s * (y - y0), s * (x - x0) + c * (y - y0), yaw - yaw0)
+    ox, oy, oyaw = world.odom_pose()
+    assert math.hypot(ox - truth[0], oy - truth[1]) < 0.01
+    assert abs(oyaw - truth[2]) < math.radians(1.0)
+    assert math.hypot(ox, oy) > 0.5  # it did move
+
+
+def test_place_restarts_odometry(world: SimWorld) -> None:
+    drive(world, 0.2, 0.0, 1.0)
+    world.place(0.5, -0.5, math.pi / 2)
+    assert world.odom_pose() == (0.0, 0.0, 0.0)
+    assert world.base_pose() == pytest.approx((0.5, -0.5, math.pi / 2), abs=1e-9)
+    # odom is in the floor plane; base_link rests 0.3 mm into the soft floor, tilted 0.3 degrees.
+    np.testing.assert_allclose(
+        world.frame_transform("odom"), world.frame_transform("base_link"), atol=0.006
+    )
+    assert world.command == (0.2, 0.0)  # kept
+    world.stop()
+    world.advance(0.5)
+    assert world.base_pose() == pytest.approx((0.5, -0.5, math.pi / 2), abs=1e-5)  # at rest
+
+
+def test_frames(world: SimWorld) -> None:
+    drive(world, 0.2, 0.4, 1.5)
+    frames = world.frame_transforms()
+    assert list(frames) == list(world.frame_names)
+    sensors = {*IR_KEYS, *CLIFF_KEYS, "bumper_left", "bumper_right", "imu", "charge_contacts"}
+    assert set(frames) == {"odom", "base_link", "dock", *sensors}
+    for name, matrix in frames.items():
+        np.testing.assert_allclose(matrix, world.frame_transform(name), err_msg=name)
+    base = frames["base_link"]
+    x, y, yaw = world.base_pose()
+    np.testing.assert_allclose(base[:2, 3], [x, y])
+    assert math.atan2(base[1, 0], base[0, 0]) == pytest.approx(yaw)
+    # base_link seen from odom is the dead-reckoned pose (ROS REP 105).
+    in_odom = np.linalg.inv(frames["odom"]) @ base
+    ox, oy, oyaw = world.odom_pose()
+    np.testing.assert_allclose(in_odom[:2, 3], [ox, oy], atol=1e-3)
+    assert math.atan2(in_odom[1, 0], in_odom[0, 0]) == pytest.approx(oyaw, abs=1e-3)
+    # The IR frame looks (along its z) where the sensor points.
+    ir = np.linalg.inv(base) @ frames["ir_front_left"]
+    np.testing.assert_allclose(ir[:3, 2], [math.cos(0.349), math.sin(0.349), 0.0], atol=1e-3)
+
+
+def test_unknown_frame(world: SimWorld) -> None:
+    with pytest.raises(UnknownFrameError) as caught:
+        world.frame_transform("camera")
+    assert str(caught.value) == (
+        f"unknown frame 'camera'; known frames: {sorted(world.frame_names)}"
+    )
+
+
+def run_scripted(seed: int) -> list[tuple[object, ...]]:
+    """Weave towards the east wall and into it, recording poses and sensors."""
+    world = SimWorld(seed=seed)
+    world.place(1.0, 0.0, 0.0)
+    trace: list[tuple[object, ...]] = []
+    for tick in range(300):
+        world.set_command(0.25, 0.8 * math.sin(tick / 25))
+        world.advance(TICK)
+        trace.append((world.base_pose(), world.odom_pose(), *world.read_sensors().values()))
+    return trace
+
+
+def test_same_seed_same_run_bit_for_bit() -> None:
+    first = run_scripted(seed=7)
+    assert first == run_scripted(seed=7)
+    assert any(value < IR_RANGE for row in first for value in row[5:12])  # IR saw the wall
+    assert any(row[2] for row in first)  # the bumper pressed
+
+
+def test_the_seed_changes_only_the_ir_noise() -> None:
+    one, two = run_scripted(seed=1), run_scripted(seed=2)
+    assert [row[:2] for row in one] == [row[:2] for row in two]  # same physics
+    assert one != two  # different IR noise
+
+
+def test_batching_steps_does_not_change_the_physics() -> None:
+    # Odometry integrates once per call, so only it may differ (by micrometres).
+    batched, single = SimWorld(), SimWorld()
+    for world in (batched, single):
+        world.set_command(0.2, 0.3)
+    batched.step(100)
+    for _ in range(100):
+        single.step()
+    assert batched.base_pose() == single.base_pose()
+    assert batched.odom_pose() == pytest.approx(single.odom_pose(), abs=1e-4)
+
+
+def test_time_counts_whole_steps(world: SimWorld) -> None:
+    for _ in range(500):
+        world.advance(TICK)
+    assert world.steps == 5000
+    assert world.time == 5000 * 0.002
+    assert world.advance(0.0) == 0
+
+
+def test_bad_arguments(world: SimWorld) -> None:
+    with pytest.raises(ValueError, match=r"^dt=0\.003 s is not a whole, non-negative number"):
+        world.advance(0.003)
+    with pytest.raises(
+        ValueError, match=r"^cannot step a negative number of physics steps \(-1\)$"
+    ):
+        world.step(-1)
+    with pytest.raises(
+        ValueError, match=r"^the velocity command must be finite numbers, not v=nan, w=0\.0$"
+    ):
+        world.set_command(math.nan, 0.0)
+    with pytest.raises(ValueError, match=r"^physics_dt must be a positive number of seconds"):
+        SimWorld(physics_dt=0.0)
+
+
+def test_cliff_over_a_drop(tmp_path: Path) -> None:
+    # A floor that ends at x = 0 (a 0.5 m drop beyond), the robot and a dock.
+    robot = models_dir() / "robot.xml"
+    scene = tmp_path / "ledge.xml"
+    scene.write_text(f"""
+<mujoco>
+  <option integrator="implicitfast"/>
+  <include file="{robot}"/>
+  <worldbody>
+    <geom name="ledge" type="box" size="1 1 0.05" pos="-1 0 -0.05"/>
+    <geom name="below" type="box" size="2 2 0.05" pos="0 0 -0.55"/>
+    <body name="dock" pos="-1.9 0 0">
+      <site name="dock"/>
+      <site name="dock_pad" type="box" size="0.012 0.04 0.05" pos="0 0 0.03"/>
+    </body>
+  </worldbody>
+  <sensor>
+    <framepos name="dock_contact" objtype="site" objname="charge_contacts"
+              reftype="site" refname="dock_pad"/>
+  </sensor>
+</mujoco>""")
+    world = SimWorld(scene)
+    world.place(-0.2, 0.0, 0.0)
+    world.advance(0.1)
+    state = world.read_sensors()
+    assert [state[key] for key in CLIFF_KEYS] == [False] * 4
+    world.place(-0.135, 0.0, 0.0)  # front sensors (x = 0.141) over the edge, side ones not
+    world.advance(0.02)
+    state = world.read_sensors()
+    assert [state[key] for key in CLIFF_KEYS] == [True, True, False, False]
+    assert state["docked"] is False
+
+
+def test_missing_model_file(tmp_path: Path) -> None:
+    path = tmp_path / "nowhere.xml"
+    with pytest.raises(ModelLoadError) as caught:
+        SimWorld(path)
+    assert str(caught.value) == f"cannot load the MuJoCo model {str(path)!r}: no such file"
+
+
+def test_malformed_model_file(tmp_path: Path) -> None:
+    path = tmp_path / "broken.xml"
+    path.write_text("<mujoco><worldbody>")
+    with pytest.raises(ModelLoadError) as caught:
+        SimWorld(str(path))
+    message = str(caught.value)
+    assert message.startswith(f"cannot load the MuJoCo model {str(path)!r}: XML parse error")
+    assert "XML_ERROR_MISMATCHED_ELEMENT" in message
+
+
+def test_model_without_the_robot() -> None:
+    arena = model_path("arena.xml")
+    with pytest.raises(ModelLoadError) as caught:
+        SimWorld(arena)
+    assert str(caught.value) == (
+        f"cannot simulate the model {str(arena)!r}: it has no body named 'base_link'; "
+        "the simulator needs the robot of models/robot.xml and the dock of models/arena.xml "
+        "(or parts so named)"
+    )
+
+
+def test_unknown_shipped_model() -> None:
+    with pytest.raises(ModelLoadError) as caught:
+        model_path("moon.xml")
+    assert str(caught.value) == (
+        f"no shipped model 'moon.xml' in {models_dir()}; "
+        "known models: ['arena.xml', 'robot.xml', 'scene.xml']"
+    )
+
+
+def test_mujoco_missing(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # makes `import mujoco` fail
+    with pytest.raises(SimulationUnavailableError) as caught:
+        SimWorld()
+    message = str(caught.value)
+    assert message.startswith("the simulated robot needs MuJoCo, which cannot be imported (")
+    assert message.endswith('); install it with: pip install "pyrobots-aio[sim]"')
+    assert isinstance(caught.value, ImportError)
