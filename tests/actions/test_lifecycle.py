@@ -1,0 +1,275 @@
+from __future__ import annotations
+
+import asyncio
+import logging
+import types
+
+import pytest
+
+from pyrobots_aio import (
+    ActionCancelled,
+    ActionDefinitionError,
+    ActionError,
+    ActionState,
+    EventKind,
+    ExecEvent,
+    GenericRobot,
+    Outcome,
+    PyRobotsError,
+    Robot,
+    TooManyActions,
+    action,
+)
+
+
+@action
+async def forever(robot: Robot) -> None:
+    await robot.sleep(3600)
+
+
+@action
+async def deaf(robot: Robot, release: asyncio.Event) -> None:
+    """Ignores every cancellation until ``release`` is set."""
+    while not release.is_set():
+        try:
+            await release.wait()
+        except ActionCancelled:
+            continue
+
+
+@pytest.mark.asyncio
+async def test_cancel_grace_warns_with_location_then_abandons(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    release = asyncio.Event()
+    robot = Robot(cancel_grace=2.0)
+    try:
+        async with robot:
+            t0 = robot.time()
+            handle = deaf(robot, release)
+            await robot.sleep(0.1)
+        took = asyncio.get_running_loop().time() - t0
+    finally:
+        release.set()  # let the abandoned task end, so the test leaves nothing behind
+        await asyncio.sleep(0)
+    assert took == pytest.approx(0.1 + 4.0)
+    assert handle.outcome is Outcome.CANCELLED
+    messages = [(r.levelno, r.getMessage()) for r in caplog.records if r.name.startswith("pyr")]
+    assert messages[0][0] == logging.WARNING
+    assert messages[0][1].startswith(
+        f"action deaf#{handle.id} still running 2 s after cancellation, at "
+    )
+    assert "test_lifecycle.py:" in messages[0][1]
+    assert messages[0][1].endswith("; cancelling it again")
+    assert messages[1][0] == logging.ERROR
+    assert messages[1][1].startswith(f"action deaf#{handle.id} ignored cancellation for 4 s, at ")
+
+
+@pytest.mark.asyncio
+async def test_shutdown_is_bounded_when_the_robot_task_is_cancelled() -> None:
+    release = asyncio.Event()
+    robot = Robot(cancel_grace=0.5)
+    loop = asyncio.get_running_loop()
+    t0 = loop.time()
+    try:
+        with pytest.raises(TimeoutError):
+            async with asyncio.timeout(1.0), robot:
+                deaf(robot, release)
+                forever(robot)
+                await asyncio.sleep(3600)
+        took = loop.time() - t0
+    finally:
+        release.set()
+        await asyncio.sleep(0)
+    assert took == pytest.approx(1.0 + 1.0)
+    assert not robot.is_running
+    assert robot.handles() == []
+
+
+@pytest.mark.asyncio
+async def test_leaving_the_robot_cancels_everything_and_leaves_no_task() -> None:
+    before = asyncio.all_tasks()
+    async with Robot() as robot:
+        handles = [forever(robot) for _ in range(10)]
+        await robot.sleep(0.1)
+    assert all(h.outcome is Outcome.CANCELLED for h in handles)
+    assert {h.cancel_reason for h in handles} == {"robot shutting down"}
+    await asyncio.sleep(0)
+    assert asyncio.all_tasks() - before == set()
+
+
+@pytest.mark.asyncio
+async def test_cancel_all_waits_for_every_action() -> None:
+    async with Robot() as robot:
+        handles = [forever(robot) for _ in range(100)]
+        await robot.sleep(0.1)
+        await robot.cancel_all("reset")
+        assert all(h.done() and h.cancel_reason == "reset" for h in handles)
+        assert robot.running() == []
+
+
+@pytest.mark.asyncio
+async def test_cancel_all_others_spares_the_caller_and_its_ancestors() -> None:
+    @action
+    async def emergency(robot: Robot) -> int:
+        await robot.cancel_all_others("emergency stop")
+        return len(robot.running())
+
+    @action
+    async def supervisor(robot: Robot) -> int:
+        forever(robot)
+        await robot.sleep(0.1)
+        return await emergency(robot)
+
+    async with Robot() as robot:
+        others = [forever(robot) for _ in range(3)]
+        await robot.sleep(0.05)
+        assert await supervisor(robot) == 2  # supervisor and emergency themselves
+        assert all(h.outcome is Outcome.CANCELLED for h in others)
+
+
+@pytest.mark.asyncio
+async def test_max_actions_raises_too_many_actions() -> None:
+    async with Robot(max_actions=2) as robot:
+        first, second = forever(robot), forever(robot)
+        with pytest.raises(TooManyActions) as caught:
+            forever(robot)
+        assert caught.value.running == [first, second]
+        assert str(caught.value) == (
+            "cannot start 'forever': 2 actions already running (max_actions=2): "
+            f"forever#{first.id}, forever#{second.id}; raise max_actions or cancel some"
+        )
+        first.cancel()
+        await first.wait_done()
+        third = forever(robot)
+        assert not third.done()
+
+
+def test_bad_robot_options_are_rejected() -> None:
+    with pytest.raises(ValueError, match=r"max_actions must be a positive integer or None, got 0"):
+        Robot(max_actions=0)
+    with pytest.raises(ValueError, match=r"cancel_grace must be a positive number"):
+        Robot(cancel_grace=-1)
+
+
+@pytest.mark.asyncio
+async def test_entering_a_running_robot_twice_is_an_error() -> None:
+    async with Robot() as robot:
+        with pytest.raises(PyRobotsError, match="is already running"):
+            await robot.__aenter__()
+    async with robot:  # and it can be started again afterwards
+        assert robot.is_running
+
+
+@pytest.mark.asyncio
+async def test_introspection() -> None:
+    @action
+    async def parent(robot: Robot) -> None:
+        forever(robot)
+        await robot.sleep(3600)
+
+    async with Robot() as robot:
+        handle = parent(robot)
+        await robot.sleep(1)
+        infos = robot.running()
+        assert [(i.name, i.parent, i.state) for i in infos] == [
+            ("parent", None, ActionState.RUNNING),
+            ("forever", handle.id, ActionState.RUNNING),
+        ]
+        assert infos[0].started_at == pytest.approx(robot.time() - 1)
+        assert infos[0].location is not None
+        assert "test_lifecycle.py:" in infos[0].location
+        assert robot.actioninfo(handle.id) == infos[0]
+        tree = robot.action_tree().splitlines()
+        assert tree[0].startswith(f"parent#{handle.id} running at ")
+        assert tree[1].startswith(f"  forever#{handle.id + 1} running at ")
+        with pytest.raises(ActionError, match=r"no running action with id 999"):
+            robot.actioninfo(999)
+    assert robot.action_tree() == "(no running actions)"
+
+
+class Pr2(GenericRobot):
+    @action
+    async def wave(self, times: int) -> str:
+        await self.sleep(0.1)
+        return f"waved {times} times" + (" (dummy)" if self.dummy else "")
+
+
+@pytest.mark.asyncio
+async def test_subclass_actions_bind_like_methods_and_dummy_flag() -> None:
+    async with Pr2(dummy=True) as robot:
+        assert await robot.wave(3) == "waved 3 times (dummy)"
+    assert Robot is GenericRobot
+
+
+@pytest.mark.asyncio
+async def test_attach_actions_from_modules_and_functions() -> None:
+    module = types.ModuleType("behaviours")
+
+    @action
+    async def greet(robot: Robot, name: str) -> str:
+        return f"hello {name}"
+
+    async def plain(robot: Robot) -> str:
+        return "plain"
+
+    module.greet = greet  # type: ignore[attr-defined]
+    async with Robot(actions=[module, plain]) as robot:
+        assert await robot.greet("ada") == "hello ada"
+        assert await robot.plain() == "plain"
+        with pytest.raises(AttributeError, match=r"attached actions: \['greet', 'plain'\]"):
+            robot.nope  # noqa: B018
+    with pytest.raises(ActionDefinitionError, match="module 'empty' defines no @action"):
+        Robot(actions=[types.ModuleType("empty")])
+    with pytest.raises(ActionDefinitionError, match="Robot already has that name"):
+        Robot(actions=[action(sleep)])
+
+
+async def sleep(robot: Robot) -> None:
+    await robot.sleep(1)
+
+
+def test_log_level_helpers() -> None:
+    robot = Robot()
+    logger = logging.getLogger("pyrobots_aio")
+    old = logger.level
+    try:
+        robot.debug()
+        assert logger.level == logging.DEBUG
+        robot.info()
+        assert logger.level == logging.INFO
+        robot.silent()
+        assert logger.level > logging.CRITICAL
+        robot.loglevel("WARNING")
+        assert logger.level == logging.WARNING
+    finally:
+        logger.setLevel(old)
+
+
+class Recorder:
+    def __init__(self) -> None:
+        self.events: list[ExecEvent] = []
+
+    def on_event(self, event: ExecEvent) -> None:
+        self.events.append(event)
+
+
+@pytest.mark.asyncio
+async def test_instruments_see_every_action_event() -> None:
+    recorder = Recorder()
+    async with Robot(instruments=[recorder]) as robot:
+        handle = forever(robot)
+        await robot.sleep(1)
+        handle.cancel("bored")
+        await handle.wait_done()
+    kinds = [(e.kind, e.time) for e in recorder.events]
+    assert kinds == [
+        (EventKind.ACTION_SPAWNED, pytest.approx(0.0, abs=1e9)),
+        (EventKind.ACTION_STARTED, kinds[1][1]),
+        (EventKind.CANCEL_REQUESTED, kinds[2][1]),
+        (EventKind.ACTION_FINISHED, kinds[3][1]),
+    ]
+    assert kinds[2][1] - kinds[1][1] == pytest.approx(1.0)
+    assert recorder.events[2].data == {"reason": "bored", "by": None}
+    assert recorder.events[3].data == {"outcome": "cancelled", "error": None}
+    assert {e.action for e in recorder.events} == {handle.id}

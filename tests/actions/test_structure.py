@@ -1,0 +1,259 @@
+from __future__ import annotations
+
+import asyncio
+import logging
+
+import pytest
+
+from pyrobots_aio import (
+    ActionCancelled,
+    ActionInterrupted,
+    Outcome,
+    Robot,
+    action,
+)
+
+
+class Walker(Robot):
+    """The pyRobots safe_walk listing's robot, recording what happens."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.log: list[tuple[float, str]] = []
+
+    def note(self, what: str) -> None:
+        self.log.append((self.time(), what))
+
+    @action
+    async def walk(self, speed: float) -> None:
+        self.note(f"walk {speed}")
+        try:
+            await self.sleep(3600)
+        finally:
+            self.note("walk stopped")
+
+    @action
+    async def go_back_to_rest_pose(self) -> str:
+        self.note("rest start")
+        await self.sleep(0.5)
+        self.note("rest done")
+        return "rest"
+
+
+@action
+async def safe_walk(robot: Walker, speed: float = 0.2) -> None:
+    try:
+        await robot.walk(speed)
+    except ActionCancelled:
+        await robot.go_back_to_rest_pose()
+        robot.note("cleanup done")
+        raise
+
+
+@pytest.mark.asyncio
+async def test_safe_walk_listing() -> None:
+    async with Walker() as robot:
+        t0 = robot.time()
+        handle = safe_walk(robot, 0.3)
+        await robot.sleep(1.0)
+        handle.cancel("stop")
+        assert await handle.wait_done() is Outcome.CANCELLED
+        assert [what for _, what in robot.log] == [
+            "walk 0.3",
+            "walk stopped",
+            "rest start",
+            "rest done",
+            "cleanup done",
+        ]
+        times = {what: t - t0 for t, what in robot.log}
+        assert times["walk stopped"] == pytest.approx(1.0)
+        assert times["rest done"] == pytest.approx(1.5)
+        assert handle.finished_at is not None
+        assert handle.finished_at - t0 == pytest.approx(1.5)
+
+
+@pytest.mark.asyncio
+async def test_children_and_parents() -> None:
+    async with Walker() as robot:
+        seen = {}
+
+        @action
+        async def parent(robot: Walker) -> None:
+            child = robot.walk(0.1)
+            await asyncio.sleep(0)
+            seen["child"] = child
+            seen["children"] = this.children
+            await robot.sleep(1)
+
+        this = parent(robot)
+        await robot.sleep(0.5)
+        child = seen["child"]
+        assert child.parent is this
+        assert child.childof(this)
+        assert not this.childof(child)
+        assert seen["children"] == (child,)
+        assert this.parent is None
+        await this
+        assert child.outcome is Outcome.CANCELLED
+        assert child.cancel_reason == f"its parent parent#{this.id} finished"
+        assert this.children == ()
+
+
+@pytest.mark.asyncio
+async def test_parent_is_done_only_after_its_children() -> None:
+    order = []
+
+    @action
+    async def slow_cleanup(robot: Robot, name: str) -> None:
+        try:
+            await robot.sleep(3600)
+        except ActionCancelled:
+            await robot.sleep(0.3)
+            order.append(name)
+            raise
+
+    @action
+    async def parent(robot: Robot) -> str:
+        slow_cleanup(robot, "a")
+        slow_cleanup(robot, "b")
+        await robot.sleep(0.1)
+        return "parent body over"
+
+    async with Robot() as robot:
+        handle = parent(robot)
+        assert await handle == "parent body over"
+        assert order == ["a", "b"]
+        assert robot.handles() == []
+
+
+@pytest.mark.asyncio
+async def test_cancelling_a_parent_cancels_its_whole_subtree() -> None:
+    cleaned = []
+
+    @action
+    async def leaf(robot: Robot, name: str) -> None:
+        try:
+            await robot.sleep(3600)
+        except ActionCancelled:
+            cleaned.append(name)
+            raise
+
+    @action
+    async def middle(robot: Robot) -> None:
+        leaf(robot, "grandchild")
+        try:
+            await robot.sleep(3600)
+        except ActionCancelled:
+            cleaned.append("middle")
+            raise
+
+    @action
+    async def top(robot: Robot) -> None:
+        middle(robot)
+        await leaf(robot, "child")
+
+    async with Robot() as robot:
+        handle = top(robot)
+        await robot.sleep(1)
+        assert len(robot.running()) == 4
+        handle.cancel("abort")
+        assert await handle.wait_done() is Outcome.CANCELLED
+        assert sorted(cleaned) == ["child", "grandchild", "middle"]
+        assert robot.running() == []
+
+
+@pytest.mark.asyncio
+async def test_parent_catches_interrupted_child_and_carries_on() -> None:
+    """The random-walk bug: a reflex cancels the current motion; the walk goes on."""
+    steps = []
+
+    @action
+    async def drive(robot: Robot, step: int) -> None:
+        await robot.sleep(1.0)
+        steps.append(step)
+
+    @action
+    async def random_walk(robot: Robot) -> str:
+        interrupted = 0
+        for step in range(5):
+            try:
+                await drive(robot, step)
+            except ActionInterrupted:
+                interrupted += 1
+        return f"walk over, {interrupted} interrupted"
+
+    async with Robot() as robot:
+        walk = random_walk(robot)
+        await robot.sleep(1.5)
+        (current,) = walk.children
+        current.cancel("bumper")
+        assert await walk == "walk over, 1 interrupted"
+        assert steps == [0, 2, 3, 4]
+        assert walk.outcome is Outcome.SUCCEEDED
+
+
+@pytest.mark.asyncio
+async def test_failure_is_isolated_and_logged_when_nobody_waits(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    @action
+    async def broken(robot: Robot) -> None:
+        raise RuntimeError("sensor unplugged")
+
+    @action
+    async def sibling(robot: Robot) -> str:
+        await robot.sleep(1)
+        return "fine"
+
+    @action
+    async def parent(robot: Robot) -> str:
+        broken(robot)
+        return await sibling(robot)
+
+    async with Robot() as robot:
+        assert await parent(robot) == "fine"
+    records = [r for r in caplog.records if r.name == "pyrobots_aio.actions"]
+    assert [r.getMessage() for r in records] == [
+        "action broken#2 failed and nobody is waiting for it"
+    ]
+    assert records[0].levelno == logging.ERROR
+    assert records[0].exc_info is not None
+    assert "sensor unplugged" in caplog.text
+
+
+@pytest.mark.asyncio
+async def test_awaited_failure_is_not_logged(caplog: pytest.LogCaptureFixture) -> None:
+    @action
+    async def broken(robot: Robot) -> None:
+        await robot.sleep(0.1)
+        raise RuntimeError("sensor unplugged")
+
+    async with Robot() as robot:
+        with pytest.raises(RuntimeError):
+            await broken(robot)
+    assert "nobody is waiting" not in caplog.text
+
+
+@pytest.mark.asyncio
+async def test_cleanup_started_after_cancel_runs_normally() -> None:
+    @action
+    async def rest(robot: Robot) -> str:
+        await robot.sleep(0.2)
+        return "rest"
+
+    results = []
+
+    @action
+    async def worker(robot: Robot) -> None:
+        try:
+            await robot.sleep(3600)
+        except ActionCancelled:
+            results.append(await rest(robot))
+            raise
+
+    async with Robot() as robot:
+        handle = worker(robot)
+        await robot.sleep(0.1)
+        handle.cancel()
+        await handle.wait_done()
+        assert results == ["rest"]

@@ -1,0 +1,189 @@
+"""Benchmarks of the action executive against bare asyncio tasks (DESIGN.md §10).
+
+``run()`` returns the figures in a flat dict; every ratio compares two things
+measured in this same run, on this same machine.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import gc
+import statistics
+import time
+from pathlib import Path
+
+from pyrobots_aio import ActionCancelled, Robot, action
+
+THROUGHPUT_N = 20_000
+LATENCY_N = 2_000
+SLEEPERS = 100_000
+CANCEL_ALL = (1_000, 10_000)
+WORK_N = 200_000
+
+
+@action
+async def nop(robot: Robot) -> int:
+    return 1
+
+
+async def bare_nop() -> int:
+    return 1
+
+
+@action
+async def sleeper(robot: Robot) -> None:
+    await asyncio.sleep(3600)
+
+
+async def bare_sleeper() -> None:
+    await asyncio.sleep(3600)
+
+
+def _work(n: int) -> int:
+    total = 0
+    for i in range(n):
+        total += i * i % 7
+    return total
+
+
+@action
+async def work_action(robot: Robot, n: int) -> int:
+    return _work(n)
+
+
+def _rss_bytes() -> int:
+    pages = int(Path("/proc/self/statm").read_text().split()[1])
+    return pages * 4096
+
+
+async def _throughput(robot: Robot) -> dict[str, float]:
+    start = time.perf_counter()
+    for _ in range(THROUGHPUT_N):
+        await nop(robot)
+    action_s = time.perf_counter() - start
+    start = time.perf_counter()
+    for _ in range(THROUGHPUT_N):
+        await asyncio.create_task(bare_nop())
+    bare_s = time.perf_counter() - start
+    start = time.perf_counter()
+    handles = [nop(robot) for _ in range(THROUGHPUT_N)]
+    for handle in handles:
+        await handle
+    batch_s = time.perf_counter() - start
+    return {
+        "throughput_actions_per_s": THROUGHPUT_N / action_s,
+        "throughput_bare_tasks_per_s": THROUGHPUT_N / bare_s,
+        "throughput_ratio_vs_bare": action_s / bare_s,
+        "throughput_batch_actions_per_s": THROUGHPUT_N / batch_s,
+    }
+
+
+async def _cancel_latency(robot: Robot) -> dict[str, float]:
+    samples: list[int] = []
+    marks: dict[str, int] = {}
+
+    @action
+    async def victim(robot: Robot) -> None:
+        try:
+            await asyncio.sleep(3600)
+        except ActionCancelled:
+            samples.append(time.perf_counter_ns() - marks["cancel"])
+            raise
+
+    for _ in range(LATENCY_N):
+        handle = victim(robot)
+        await asyncio.sleep(0)
+        marks["cancel"] = time.perf_counter_ns()
+        handle.cancel("bench")
+        await handle.wait_done()
+    bare: list[int] = []
+
+    async def bare_victim() -> None:
+        try:
+            await asyncio.sleep(3600)
+        except asyncio.CancelledError:
+            bare.append(time.perf_counter_ns() - marks["cancel"])
+            raise
+
+    for _ in range(LATENCY_N):
+        task = asyncio.create_task(bare_victim())
+        await asyncio.sleep(0)
+        marks["cancel"] = time.perf_counter_ns()
+        task.cancel()
+        await asyncio.gather(task, return_exceptions=True)
+    return {
+        "cancel_to_handler_median_us": statistics.median(samples) / 1e3,
+        "cancel_to_handler_p99_us": _p99(samples) / 1e3,
+        "cancel_to_handler_bare_p99_us": _p99(bare) / 1e3,
+    }
+
+
+async def _memory(robot: Robot) -> dict[str, float]:
+    gc.collect()
+    before = _rss_bytes()
+    handles = [sleeper(robot) for _ in range(SLEEPERS)]
+    await asyncio.sleep(0.01)
+    gc.collect()
+    per_action = (_rss_bytes() - before) / SLEEPERS
+    start = time.perf_counter()
+    await robot.cancel_all("bench")
+    cancel_s = time.perf_counter() - start
+    assert all(h.done() for h in handles)
+    del handles
+    gc.collect()
+    before = _rss_bytes()
+    tasks = [asyncio.create_task(bare_sleeper()) for _ in range(SLEEPERS)]
+    await asyncio.sleep(0.01)
+    gc.collect()
+    per_task = (_rss_bytes() - before) / SLEEPERS
+    for task in tasks:
+        task.cancel()
+    await asyncio.gather(*tasks, return_exceptions=True)
+    return {
+        "concurrent_sleeping_actions": float(SLEEPERS),
+        "rss_per_sleeping_action_kib": per_action / 1024,
+        "rss_per_bare_task_kib": per_task / 1024,
+        f"cancel_all_{SLEEPERS}_s": cancel_s,
+    }
+
+
+async def _cancel_all(robot: Robot) -> dict[str, float]:
+    figures = {}
+    for count in CANCEL_ALL:
+        handles = [sleeper(robot) for _ in range(count)]
+        await asyncio.sleep(0)
+        start = time.perf_counter()
+        await robot.cancel_all("bench")
+        figures[f"cancel_all_{count}_s"] = time.perf_counter() - start
+        assert all(h.done() for h in handles)
+    return figures
+
+
+async def _python_work(robot: Robot) -> dict[str, float]:
+    plain, inside = [], []
+    for _ in range(5):  # best of five of each: the machine is shared and noisy
+        start = time.perf_counter()
+        _work(WORK_N)
+        plain.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        await work_action(robot, WORK_N)
+        inside.append(time.perf_counter() - start)
+    return {"python_work_inside_action_ratio": min(inside) / min(plain)}
+
+
+def _p99(samples: list[int]) -> float:
+    ordered = sorted(samples)
+    return float(ordered[int(0.99 * (len(ordered) - 1))])
+
+
+async def _main() -> dict[str, float]:
+    figures: dict[str, float] = {}
+    async with Robot() as robot:
+        for part in (_python_work, _throughput, _cancel_latency, _cancel_all, _memory):
+            figures.update(await part(robot))
+    return figures
+
+
+def run() -> dict[str, float]:
+    """Measure the executive; return the figures."""
+    return asyncio.run(_main())
