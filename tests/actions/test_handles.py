@@ -16,6 +16,8 @@ from pyrobots_aio import (
     action,
 )
 
+pytestmark = pytest.mark.virtual_time
+
 
 @action
 async def double(robot: Robot, x: int) -> int:

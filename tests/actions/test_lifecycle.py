@@ -21,6 +21,8 @@ from pyrobots_aio import (
     action,
 )
 
+pytestmark = pytest.mark.virtual_time
+
 
 @action
 async def forever(robot: Robot) -> None:
@@ -72,7 +74,7 @@ async def test_shutdown_is_bounded_when_the_robot_task_is_cancelled() -> None:
     loop = asyncio.get_running_loop()
     t0 = loop.time()
     try:
-        with pytest.raises(TimeoutError):
+        with pytest.raises(TimeoutError):  # noqa: PT012 - the robot's lifetime is the point
             async with asyncio.timeout(1.0), robot:
                 deaf(robot, release)
                 forever(robot)

@@ -40,6 +40,9 @@ class Walker(Robot):
         return "rest"
 
 
+pytestmark = pytest.mark.virtual_time
+
+
 @action
 async def safe_walk(robot: Walker, speed: float = 0.2) -> None:
     try:

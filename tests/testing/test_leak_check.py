@@ -35,7 +35,9 @@ def test_leak_check_fails_a_test_that_leaves_a_task(pytester: pytest.Pytester) -
             """
         )
     )
-    pytester.makeini("[pytest]\nasyncio_mode = strict\nasyncio_default_fixture_loop_scope = function\n")
+    pytester.makeini(
+        "[pytest]\nasyncio_mode = strict\nasyncio_default_fixture_loop_scope = function\n"
+    )
     result = pytester.runpytest()
     result.assert_outcomes(passed=2, errors=1)
     result.stdout.fnmatch_lines(["*tasks outlived the test*"])

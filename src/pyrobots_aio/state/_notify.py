@@ -1,0 +1,171 @@
+"""Change notification for the state store: subscriptions and their per-key index.
+
+Writes cost O(subscribers of the written key): every-key subscribers sit in
+one tuple, the others in a tuple per key. The tuples are copied on write, so
+a notification in progress iterates a snapshot whatever (un)subscribes meanwhile.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+from collections import deque
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Mapping
+
+    Subscriber = Callable[[Mapping[str, Any]], object]
+    _Delivery = tuple[tuple["Subscription", ...], Mapping[str, Any]]
+
+_log = logging.getLogger("pyrobots_aio.state")
+
+
+class Subscription:
+    """A change callback registered with `StateStore.subscribe`; `close` it to stop.
+
+    Also a context manager that closes it on exit.
+    """
+
+    __slots__ = ("_callback", "_closed", "_index", "_keys", "_order")
+
+    def __init__(
+        self,
+        index: SubscriberIndex,
+        callback: Subscriber,
+        keys: frozenset[str] | None,
+        order: int,
+    ) -> None:
+        self._index = index
+        self._callback = callback
+        self._keys = keys
+        self._order = order
+        self._closed = False
+
+    @property
+    def keys(self) -> frozenset[str] | None:
+        """The keys watched, or None for every key."""
+        return self._keys
+
+    @property
+    def closed(self) -> bool:
+        """Whether `close` was called."""
+        return self._closed
+
+    def close(self) -> None:
+        """Stop notifications at once, even for a write being notified right now."""
+        if not self._closed:
+            self._closed = True
+            self._index.remove(self)
+
+    def __enter__(self) -> Subscription:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        keys = "every key" if self._keys is None else f"keys={sorted(self._keys)}"
+        state = " closed" if self._closed else ""
+        name = getattr(self._callback, "__qualname__", type(self._callback).__qualname__)
+        return f"<Subscription {name} {keys}{state}>"
+
+    def deliver(self, changes: Mapping[str, Any]) -> None:
+        """Call the callback unless closed; log what it raises."""
+        if self._closed:
+            return
+        try:
+            self._callback(changes)
+        except Exception:
+            _log.exception("state subscriber %r failed on a write of %s", self, sorted(changes))
+
+
+class SubscriberIndex:
+    """The subscriptions of one store, indexed by key, and their in-order delivery."""
+
+    __slots__ = ("_by_key", "_every", "_notifying", "_orders", "_pending")
+
+    def __init__(self) -> None:
+        self._every: tuple[Subscription, ...] = ()
+        self._by_key: dict[str, tuple[Subscription, ...]] = {}
+        self._orders = itertools.count()
+        self._notifying = False
+        self._pending: deque[_Delivery] = deque()
+
+    def add(self, callback: Subscriber, keys: str | Iterable[str] | None) -> Subscription:
+        """Register ``callback`` for ``keys`` (None: every key)."""
+        watched = _watched(keys)
+        sub = Subscription(self, callback, watched, next(self._orders))
+        if watched is None:
+            self._every = (*self._every, sub)
+        else:
+            for key in watched:
+                self._by_key[key] = (*self._by_key.get(key, ()), sub)
+        return sub
+
+    def remove(self, sub: Subscription) -> None:
+        """Unregister ``sub`` (copy-on-write: running notifications keep their snapshot)."""
+        if sub.keys is None:
+            self._every = tuple(s for s in self._every if s is not sub)
+            return
+        for key in sub.keys:
+            rest = tuple(s for s in self._by_key[key] if s is not sub)
+            if rest:
+                self._by_key[key] = rest
+            else:
+                del self._by_key[key]
+
+    def notify(self, key: str, value: Any) -> None:
+        """Tell the subscribers of ``key`` that ``value`` was written."""
+        subs = self._every + self._by_key.get(key, ())
+        if subs:
+            self._run([(subs, MappingProxyType({key: value}))])
+
+    def notify_batch(self, changes: dict[str, Any]) -> None:
+        """Tell each subscriber, once, the written keys it watches."""
+        deliveries: list[_Delivery] = []
+        if self._every:
+            deliveries.append((self._every, MappingProxyType(changes)))
+        per_sub: dict[Subscription, dict[str, Any]] = {}
+        for key, value in changes.items():
+            for sub in self._by_key.get(key, ()):
+                per_sub.setdefault(sub, {})[key] = value
+        ordered = sorted(per_sub, key=lambda s: s._order)
+        deliveries.extend(((sub,), MappingProxyType(per_sub[sub])) for sub in ordered)
+        if deliveries:
+            self._run(deliveries)
+
+    def _run(self, deliveries: list[_Delivery]) -> None:
+        if self._notifying:  # a subscriber wrote: deliver after the write being notified
+            self._pending.extend(deliveries)
+            return
+        self._notifying = True
+        try:
+            for subs, changes in deliveries:
+                for sub in subs:
+                    sub.deliver(changes)
+            while self._pending:
+                subs, changes = self._pending.popleft()
+                for sub in subs:
+                    sub.deliver(changes)
+        finally:
+            self._notifying = False
+            self._pending.clear()
+
+
+def check_key(key: object) -> None:
+    """Raise TypeError unless ``key`` is a string."""
+    if not isinstance(key, str):
+        raise TypeError(f"state keys are strings, got {key!r} ({type(key).__name__})")
+
+
+def _watched(keys: str | Iterable[str] | None) -> frozenset[str] | None:
+    if keys is None:
+        return None
+    watched = frozenset((keys,)) if isinstance(keys, str) else frozenset(keys)
+    if not watched:
+        raise ValueError("keys is empty: pass None to watch every key")
+    for key in watched:
+        check_key(key)
+    return watched
