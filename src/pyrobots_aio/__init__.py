@@ -42,6 +42,10 @@ from .actions import ActionState as ActionState
 from .actions import BoundAction as BoundAction
 from .actions import Outcome as Outcome
 from .actions import action as action
+from .actions import lock as lock
+from .resources import CompoundResource as CompoundResource
+from .resources import Resource as Resource
+from .resources import ResourceManager as ResourceManager
 from .robot import Backend as Backend
 from .robot import GenericRobot as GenericRobot
 from .robot import Robot as Robot
@@ -60,6 +64,7 @@ __all__ = [
     "ActionState",
     "Backend",
     "BoundAction",
+    "CompoundResource",
     "CorruptRecordingError",
     "EventKind",
     "ExecEvent",
@@ -75,7 +80,9 @@ __all__ = [
     "PoseError",
     "PyRobotsError",
     "RecordingError",
+    "Resource",
     "ResourceError",
+    "ResourceManager",
     "Robot",
     "RobotNotRunningError",
     "SimulationError",
@@ -85,4 +92,5 @@ __all__ = [
     "UnknownFrameError",
     "UnknownStateKeyError",
     "action",
+    "lock",
 ]

@@ -10,6 +10,7 @@ from ._handle import ActionState as ActionState
 from ._handle import Outcome as Outcome
 from ._info import ActionInfo as ActionInfo
 from ._info import render_tree as render_tree
+from ._lock import lock as lock
 
 __all__ = [
     "Action",
@@ -21,5 +22,6 @@ __all__ = [
     "Outcome",
     "action",
     "current_action",
+    "lock",
     "render_tree",
 ]

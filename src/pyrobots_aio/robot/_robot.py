@@ -16,6 +16,9 @@ from .._core._instrument import Instrument, Instruments
 from .._exceptions import ActionDefinitionError, ActionError, PyRobotsError
 from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
 from ..actions import render_tree as _render_tree
+from ..resources import ResourceManager
+from ..state import StateStore
+from ._monitoring import StateMethods
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
@@ -28,7 +31,7 @@ _log = logging.getLogger("pyrobots_aio")
 SHUTDOWN_REASON = "robot shutting down"
 
 
-class Robot:
+class Robot(StateMethods):
     """A robot: runs actions, arbitrates resources, watches its state.
 
     Args:
@@ -74,6 +77,8 @@ class Robot:
         self._executive = Executive(
             self, max_actions=max_actions, cancel_grace=cancel_grace, instruments=self.instruments
         )
+        self.resources: ResourceManager[ActionHandle[Any]] = ResourceManager(self.instruments)
+        self.state = StateStore()
         self.backend = backend
         for item in actions:
             self._attach(item)

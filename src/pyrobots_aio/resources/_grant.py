@@ -1,0 +1,159 @@
+"""Requests for resources (`Grant`) and the lock state of one plain resource (`Leaf`).
+
+Each leaf keeps a *stack* of holds, outermost first; every hold's owner is
+(or descends from) the owner of the hold below it, because ownership is
+inherited: a leaf is free to an owner when nobody holds it or its innermost
+holder is that owner or one of its ancestors. Each leaf also keeps a
+`WaitQueue` of the requests waiting for it, in service order.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
+
+from .._exceptions import LockUsageError
+from ._queue import WaitQueue
+
+if TYPE_CHECKING:
+    import asyncio
+    from collections.abc import Callable
+
+    from ._manager import ResourceManager
+    from ._resource import AnyResource, Resource
+
+NEW, WAITING, HELD, RELEASED = range(4)
+_STATES = ("new", "waiting", "held", "released")
+
+
+class Owner(Protocol):
+    """What the manager needs of whoever takes resources (`ActionHandle` fits)."""
+
+    held: tuple[str, ...]
+    """Names of the resources it holds (the manager keeps this up to date)."""
+    awaiting: tuple[str, ...]
+    """Names of the resources it waits for (the manager keeps this up to date)."""
+
+    @property
+    def id(self) -> int:
+        """Its id, for messages and events."""
+
+    @property
+    def name(self) -> str:
+        """Its name, for messages and events."""
+
+    @property
+    def parent(self) -> Owner | None:
+        """The owner it descends from; a descendant may take what an ancestor holds."""
+
+    def cancel(self, reason: str | None = None) -> bool:
+        """Request its cancellation (preemption); return False if it is done."""
+
+    def done(self) -> bool:
+        """Whether it is over; its resources are then released."""
+
+    def add_done_callback(self, callback: Callable[[], None]) -> None:
+        """Call ``callback()`` once it is done."""
+
+
+OwnerT = TypeVar("OwnerT", bound=Owner)
+
+
+def check_options(wait: object, priority: object, preempt: object) -> None:
+    """Raise `LockUsageError` unless ``wait``/``preempt`` are bools and ``priority`` an int."""
+    if isinstance(priority, bool) or not isinstance(priority, int):
+        msg = f"priority must be an int, got {priority!r}; e.g. priority=10 (higher goes first)"
+        raise LockUsageError(msg)
+    for option, value in (("wait", wait), ("preempt", preempt)):
+        if not isinstance(value, bool):
+            msg = f"{option} must be True or False, got {value!r}"
+            raise LockUsageError(msg)
+
+
+def descends(node: Owner | None, ancestor: Owner) -> bool:
+    """Whether ``node`` is ``ancestor`` or one of its descendants."""
+    while node is not None:
+        if node is ancestor:
+            return True
+        node = node.parent
+    return False
+
+
+def who(owner: Owner) -> str:
+    """``name#id``, as messages name an owner."""
+    return f"{owner.name}#{owner.id}"
+
+
+class Grant(Generic[OwnerT]):
+    """One request for resources: waiting, then held until released.
+
+    `ResourceManager.acquire` returns it once held; `release` is idempotent.
+
+    Attributes:
+        owner: Who asked (an `ActionHandle` on a robot).
+        resources: The resources asked for.
+        priority: The priority of the request.
+    """
+
+    __slots__ = (
+        "_future",
+        "_manager",
+        "_state",
+        "key",
+        "leaves",
+        "names",
+        "owner",
+        "preempt",
+        "priority",
+        "resources",
+        "wait",
+    )
+
+    def __init__(
+        self,
+        manager: ResourceManager[OwnerT],
+        owner: OwnerT,
+        resources: tuple[AnyResource, ...],
+        leaves: tuple[Leaf[OwnerT], ...],
+        options: tuple[bool, int, bool],
+        *,
+        seq: int,
+    ) -> None:
+        self._manager = manager
+        self._state = NEW
+        self._future: asyncio.Future[None] | None = None
+        self.owner = owner
+        self.resources = resources
+        self.names = tuple(dict.fromkeys(r.name for r in resources))
+        self.leaves = leaves
+        self.wait, self.priority, self.preempt = options
+        self.key = (-self.priority, 1, seq)
+
+    @property
+    def waiting(self) -> bool:
+        """Whether the request is still queued."""
+        return self._state == WAITING
+
+    @property
+    def held(self) -> bool:
+        """Whether the resources are held (granted and not yet released)."""
+        return self._state == HELD
+
+    def release(self) -> None:
+        """Release the resources (does nothing if they are already released)."""
+        self._manager.release(self)
+
+    def __repr__(self) -> str:
+        names = ", ".join(repr(n) for n in self.names)
+        state = _STATES[self._state]
+        return f"<Grant {names} {state} by {who(self.owner)} priority={self.priority}>"
+
+
+class Leaf(Generic[OwnerT]):
+    """The lock state of one plain resource: its stack of holds and its waiting line."""
+
+    __slots__ = ("holds", "queue", "resource")
+
+    def __init__(self, resource: Resource) -> None:
+        self.resource = resource
+        self.holds: list[Grant[OwnerT]] = []
+        self.queue: WaitQueue[Grant[OwnerT]] = WaitQueue()

@@ -1,0 +1,383 @@
+"""ResourceManager: the lock state of one robot (``robot.resources``).
+
+The manager keeps, for each plain resource it has seen, a `Leaf` (holds and
+waiting line) and applies the rules of `_rules`. A hand-off is served by
+scanning the lines of the leaves whose state changed, from the front, and
+granting every request that can now proceed; a scan stops at the first
+request that cannot, since everything behind it on that leaf yields to it.
+Only when some descendant of a blocking holder waits (an exemption might
+apply) does a scan go past it. Granted waiters are woken through their own
+future: no thundering herd, no polling, and a hand-off costs the same with
+one waiter or a thousand.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import logging
+from typing import TYPE_CHECKING, Generic
+
+from .._core._instrument import EventKind, ExecEvent, Instruments
+from .._exceptions import ActionSkipped, LockUsageError
+from . import _rules
+from ._grant import HELD, RELEASED, WAITING, Grant, Leaf, Owner, OwnerT, check_options, who
+from ._resource import AnyResource, Resource, check_resource
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+_log = logging.getLogger("pyrobots_aio.resources")
+
+
+class _Record(Generic[OwnerT]):
+    """The grants and waiting requests of one owner."""
+
+    __slots__ = ("grants", "waiting")
+
+    def __init__(self) -> None:
+        self.grants: list[Grant[OwnerT]] = []
+        self.waiting: list[Grant[OwnerT]] = []
+
+
+def _names(grants: list[Grant[OwnerT]]) -> tuple[str, ...]:
+    """The names of the resources of ``grants``, each once, in order."""
+    if len(grants) == 1:
+        return grants[0].names
+    return tuple(dict.fromkeys(name for grant in grants for name in grant.names))
+
+
+def _loop_time() -> float:
+    return asyncio.get_running_loop().time()
+
+
+class ResourceManager(Generic[OwnerT]):
+    """The lock state of one robot (``robot.resources``): who holds what, who waits.
+
+    Args:
+        instruments: Where resource events go (waiting, acquired, released,
+            preempted, skipped).
+        clock: The time stamp of those events; the running loop's clock by default.
+
+    Example:
+        >>> import asyncio
+        >>> from pyrobots_aio import Robot, action
+        >>> from pyrobots_aio.actions import lock
+        >>> from pyrobots_aio.resources import Resource
+        >>> WHEELS = Resource("wheels")
+        >>> @action
+        ... @lock(WHEELS)
+        ... async def drive(robot: Robot) -> str:
+        ...     return repr(robot.resources)
+        >>> async def main() -> str:
+        ...     async with Robot() as robot:
+        ...         return await drive(robot)
+        >>> asyncio.run(main())
+        "<ResourceManager 'wheels' held by drive#1>"
+    """
+
+    def __init__(
+        self, instruments: Instruments | None = None, *, clock: Callable[[], float] | None = None
+    ) -> None:
+        self._instruments = instruments if instruments is not None else Instruments()
+        self._clock = clock if clock is not None else _loop_time
+        self._leaves: dict[str, Leaf[OwnerT]] = {}
+        self._owners: dict[OwnerT, _Record[OwnerT]] = {}
+        self._below: dict[Owner, int] = {}
+        """For every owner, how many queued requests it or its descendants have."""
+        self._seq = 0
+        self._work: list[Leaf[OwnerT]] = []
+        self._marked: set[Grant[OwnerT]] = set()
+        self._flushing = False
+
+    # -- taking and giving back -------------------------------------------
+
+    async def acquire(
+        self,
+        owner: OwnerT,
+        *resources: AnyResource,
+        wait: bool = True,
+        priority: int = 0,
+        preempt: bool = False,
+    ) -> Grant[OwnerT]:
+        """Take every leaf of ``resources`` at once for ``owner``, waiting if need be.
+
+        Args:
+            owner: Who takes them (an `ActionHandle`).
+            *resources: Plain or compound resources, taken in one atomic request.
+            wait: If False, raise `ActionSkipped` instead of waiting.
+            priority: Higher priorities are served first.
+            preempt: Cancel the holders in the way if all have a lower priority,
+                then wait, first in line, until they are done.
+
+        Returns:
+            The `Grant`, held; call its ``release()`` when done.
+
+        Raises:
+            ActionSkipped: ``wait`` is False and a resource is busy (or promised
+                to an earlier request).
+            InvalidResourceError: Something given is not a resource.
+            LockUsageError: Bad options, no resources, or ``owner`` is done.
+        """
+        grant = self._request(owner, resources, (wait, priority, preempt))
+        if _rules.grantable(grant, self._below):
+            self._grant(grant)
+            return grant
+        preempting = preempt and self._preempt(grant)
+        if not wait and not preempting:
+            self._skip(grant)
+        return await self._wait(grant, preempting=preempting)
+
+    def release(self, grant: Grant[OwnerT]) -> None:
+        """Release ``grant`` and serve whoever can now proceed (idempotent)."""
+        if grant._state == WAITING:
+            self._withdraw(grant)
+        if grant._state != HELD:
+            return
+        grant._state = RELEASED
+        for leaf in grant.leaves:
+            leaf.holds.remove(grant)
+        record = self._owners.get(grant.owner)
+        if record is not None:
+            record.grants.remove(grant)
+            self._sync(grant.owner, record)
+        if self._instruments:
+            self._emit(EventKind.RESOURCE_RELEASED, grant)
+        self._flush(grant.leaves)
+
+    # -- introspection ----------------------------------------------------
+
+    def owner(self, resource: AnyResource) -> OwnerT | None:
+        """The action holding ``resource`` (its first held leaf, for a compound), or None.
+
+        With inherited ownership this is the innermost holder: the descendant
+        now using what its ancestor locked.
+        """
+        for leaf in check_resource(resource, "the resource to look up").leaves:
+            state = self._leaves.get(leaf.name)
+            if state is not None and state.holds:
+                return state.holds[-1].owner
+        return None
+
+    def waiters(self, resource: AnyResource) -> list[OwnerT]:
+        """The owners waiting for ``resource`` (any of its leaves), in service order."""
+        found: dict[Grant[OwnerT], None] = {}
+        for leaf in check_resource(resource, "the resource to look up").leaves:
+            state = self._leaves.get(leaf.name)
+            if state is not None:
+                found.update(dict.fromkeys(state.queue))
+        ordered = sorted(found, key=lambda grant: grant.key)
+        return list(dict.fromkeys(grant.owner for grant in ordered))
+
+    def held(self) -> dict[Resource, OwnerT]:
+        """Every plain resource held now, and its (innermost) holder."""
+        return {s.resource: s.holds[-1].owner for s in self._leaves.values() if s.holds}
+
+    def __repr__(self) -> str:
+        parts = [self._describe(s) for s in self._leaves.values() if s.holds or s.queue]
+        return f"<ResourceManager {'; '.join(parts) if parts else 'idle'}>"
+
+    @staticmethod
+    def _describe(state: Leaf[OwnerT]) -> str:
+        what = f"held by {who(state.holds[-1].owner)}" if state.holds else "free"
+        queued = [who(grant.owner) for grant in state.queue]
+        if queued:
+            more = f" and {len(queued) - 5} more" if len(queued) > 5 else ""
+            what += f", waiters [{', '.join(queued[:5])}{more}]"
+        return f"{state.resource.name!r} {what}"
+
+    # -- requests ---------------------------------------------------------
+
+    def _request(
+        self, owner: OwnerT, resources: tuple[AnyResource, ...], options: tuple[bool, int, bool]
+    ) -> Grant[OwnerT]:
+        check_options(*options)
+        if not resources:
+            msg = f"{who(owner)} asked for no resource; name at least one to acquire"
+            raise LockUsageError(msg)
+        for resource in resources:
+            check_resource(resource, "a resource to acquire")
+        if owner.done():
+            names = [r.name for r in resources]
+            msg = f"{who(owner)} is done; it cannot take {names} any more"
+            raise LockUsageError(msg)
+        leaves = dict.fromkeys(self._leaf(leaf) for r in resources for leaf in r.leaves)
+        self._seq += 1
+        return Grant(self, owner, resources, tuple(leaves), options, seq=self._seq)
+
+    def _leaf(self, resource: Resource) -> Leaf[OwnerT]:
+        state = self._leaves.get(resource.name)
+        if state is None:
+            state = self._leaves[resource.name] = Leaf(resource)
+        return state
+
+    def _record(self, owner: OwnerT) -> _Record[OwnerT]:
+        record = self._owners.get(owner)
+        if record is None:
+            record = self._owners[owner] = _Record()
+            owner.add_done_callback(functools.partial(self._owner_done, owner))
+        return record
+
+    async def _wait(self, grant: Grant[OwnerT], *, preempting: bool) -> Grant[OwnerT]:
+        if preempting:  # first in line among its priority
+            grant.key = (grant.key[0], 0, grant.key[2])
+        grant._state = WAITING
+        owner = grant.owner
+        record = self._record(owner)
+        record.waiting.append(grant)
+        for leaf in grant.leaves:
+            leaf.queue.add(grant)
+        self._count_below(owner, 1)
+        self._sync(owner, record)
+        if self._instruments:
+            self._emit(EventKind.RESOURCE_WAITING, grant)
+        future = grant._future = asyncio.get_running_loop().create_future()
+        try:
+            await future
+        except BaseException:  # cancelled (or the owner ended): leave the line, then re-raise
+            self._withdraw(grant)
+            raise
+        return grant
+
+    def _withdraw(self, grant: Grant[OwnerT]) -> None:
+        """Take a waiting request out of line, or release it if it was granted meanwhile."""
+        if grant._state == HELD:
+            self.release(grant)
+            return
+        if grant._state != WAITING:
+            return
+        grant._state = RELEASED
+        for leaf in grant.leaves:
+            leaf.queue.discard(grant)
+        self._count_below(grant.owner, -1)
+        record = self._owners.get(grant.owner)
+        if record is not None:
+            record.waiting.remove(grant)
+            self._sync(grant.owner, record)
+        if self._instruments:
+            self._emit(EventKind.RESOURCE_RELEASED, grant, withdrawn=True)
+        self._flush(grant.leaves)
+
+    def _grant(self, grant: Grant[OwnerT]) -> None:
+        waited = grant._state == WAITING
+        grant._state = HELD
+        owner = grant.owner
+        record = self._record(owner)
+        for leaf in grant.leaves:
+            if waited:
+                leaf.queue.discard(grant)
+            leaf.holds.append(grant)
+        if waited:
+            record.waiting.remove(grant)
+            self._count_below(owner, -1)
+            if grant._future is not None and not grant._future.done():
+                grant._future.set_result(None)
+        record.grants.append(grant)
+        self._sync(owner, record)
+        if self._instruments:
+            self._emit(EventKind.RESOURCE_ACQUIRED, grant)
+        self._flush(grant.leaves)
+
+    def _owner_done(self, owner: OwnerT) -> None:
+        """Safety net: an owner that is done holds and awaits nothing."""
+        record = self._owners.pop(owner, None)
+        if record is None:
+            return
+        for grant in list(record.waiting):
+            future = grant._future
+            self._withdraw(grant)
+            if future is not None and not future.done():
+                names = list(grant.names)
+                msg = f"{who(owner)} finished while still waiting for {names}"
+                future.set_exception(LockUsageError(msg))
+        for grant in list(record.grants):
+            _log.warning("%s is done but still held %s; released", who(owner), list(grant.names))
+            self.release(grant)
+        owner.held = ()
+        owner.awaiting = ()
+
+    # -- arbitration ------------------------------------------------------
+
+    def _count_below(self, owner: Owner, delta: int) -> None:
+        below = self._below
+        node: Owner | None = owner
+        while node is not None:
+            count = below.get(node, 0) + delta
+            if count:
+                below[node] = count
+            else:
+                del below[node]
+            node = node.parent
+
+    def _flush(self, leaves: Iterable[Leaf[OwnerT]]) -> None:
+        """Serve every request that the change of ``leaves`` lets proceed."""
+        self._work.extend(leaf for leaf in leaves if leaf.queue)
+        if self._flushing:
+            return
+        self._flushing = True
+        try:
+            while self._work:
+                self._scan(self._work.pop())
+        finally:
+            self._flushing = False
+            self._work.clear()
+            self._marked.clear()
+
+    def _scan(self, leaf: Leaf[OwnerT]) -> None:
+        queue = leaf.queue
+        head = queue.first()
+        while head is not None and _rules.grantable(head, self._below):
+            self._grant(head)
+            head = queue.first()
+        if head is None or not _rules.may_exempt(head, self._below):
+            return
+        for grant in list(queue):  # rare: descendants of a holder wait, look further
+            if not grant.waiting:
+                continue
+            if _rules.grantable(grant, self._below):
+                self._grant(grant)
+            elif _rules.may_exempt(grant, self._below):
+                if grant not in self._marked:
+                    self._marked.add(grant)
+                    self._work.extend(grant.leaves)
+            else:
+                return
+
+    def _preempt(self, grant: Grant[OwnerT]) -> bool:
+        """Cancel the holders in ``grant``'s way if all have a lower priority."""
+        blockers = _rules.blockers(grant)
+        if not blockers or any(hold.priority >= grant.priority for hold, _ in blockers):
+            return False
+        owner, done = grant.owner, set[Owner]()
+        for hold, leaf in blockers:
+            if hold.owner in done:
+                continue
+            done.add(hold.owner)
+            name = leaf.resource.name
+            reason = f"preempted by {who(owner)} (priority {grant.priority}) for {name!r}"
+            if self._instruments:
+                data = {"resource": name, "by": owner.id, "reason": reason}
+                self._emit(EventKind.RESOURCE_PREEMPTED, hold, **data)
+            hold.owner.cancel(reason)
+        return True
+
+    def _skip(self, grant: Grant[OwnerT]) -> None:
+        resource, holder = _rules.obstacle(grant, self._below)
+        if self._instruments:
+            holder_id = holder.id if holder is not None else None
+            self._emit(EventKind.RESOURCE_SKIPPED, grant, busy=resource.name, holder=holder_id)
+        raise ActionSkipped(resource, holder)
+
+    # -- bookkeeping ------------------------------------------------------
+
+    @staticmethod
+    def _sync(owner: OwnerT, record: _Record[OwnerT]) -> None:
+        owner.held = _names(record.grants)
+        owner.awaiting = _names(record.waiting)
+
+    def _emit(self, kind: EventKind, grant: Grant[OwnerT], **data: object) -> None:
+        owner = grant.owner
+        data.setdefault("resources", list(grant.names))
+        data.setdefault("leaves", [leaf.resource.name for leaf in grant.leaves])
+        data.setdefault("priority", grant.priority)
+        self._instruments.emit(ExecEvent(kind, self._clock(), owner.id, owner.name, data))

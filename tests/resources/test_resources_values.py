@@ -1,0 +1,104 @@
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from pyrobots_aio import InvalidResourceError
+from pyrobots_aio.resources import CompoundResource, Resource
+
+L_ARM, R_ARM, HEAD = Resource("l_arm"), Resource("r_arm"), Resource("head")
+ARMS = CompoundResource(L_ARM, R_ARM, name="arms")
+
+
+def test_resources_compare_and_hash_by_value() -> None:
+    assert Resource("l_arm") == L_ARM
+    assert hash(Resource("l_arm")) == hash(L_ARM)
+    assert Resource("l_arm") != R_ARM
+    assert CompoundResource(L_ARM, R_ARM, name="arms") == ARMS
+    assert CompoundResource(R_ARM, L_ARM, name="arms") != ARMS
+    assert len({ARMS, CompoundResource(L_ARM, R_ARM, name="arms"), L_ARM}) == 2
+    assert Resource("arms") != ARMS
+
+
+def test_resources_are_immutable() -> None:
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        L_ARM.name = "x"  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        ARMS.name = "x"  # type: ignore[misc]
+
+
+def test_reprs() -> None:
+    assert repr(L_ARM) == "Resource('l_arm')"
+    assert repr(ARMS) == "CompoundResource(Resource('l_arm'), Resource('r_arm'), name='arms')"
+
+
+def test_leaves_of_compounds_of_compounds_each_once_in_order() -> None:
+    upper = CompoundResource(ARMS, HEAD, name="upper")
+    body = CompoundResource(upper, Resource("wheels"), L_ARM, name="body")
+    assert L_ARM.leaves == (L_ARM,)
+    assert upper.leaves == (L_ARM, R_ARM, HEAD)
+    assert body.leaves == (L_ARM, R_ARM, HEAD, Resource("wheels"))
+    assert body.parts == (upper, Resource("wheels"), L_ARM)
+
+
+def test_default_compound_name_joins_the_parts() -> None:
+    assert CompoundResource(L_ARM, HEAD).name == "l_arm+head"
+
+
+def test_compound_containing_itself_directly_is_rejected() -> None:
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(ARMS, HEAD, name="arms")
+    assert str(info.value) == (
+        "compound resource 'arms' contains itself: 'arms' > 'arms'; rename one of them"
+    )
+
+
+def test_compound_containing_itself_deeply_is_rejected() -> None:
+    upper = CompoundResource(ARMS, HEAD, name="upper")
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(Resource("wheels"), upper, name="arms")
+    assert str(info.value) == (
+        "compound resource 'arms' contains itself: 'arms' > 'upper' > 'arms'; rename one of them"
+    )
+
+
+def test_compound_named_like_one_of_its_leaves_is_rejected() -> None:
+    with pytest.raises(InvalidResourceError, match=r"'head' > 'head'"):
+        CompoundResource(L_ARM, HEAD, name="head")
+
+
+def test_compound_of_non_resources_is_rejected_naming_the_value() -> None:
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(L_ARM, "r_arm")  # type: ignore[arg-type]
+    assert str(info.value) == (
+        "'r_arm' is not a resource (needed as a part of a CompoundResource); "
+        "declare it as Resource('r_arm') or CompoundResource(...)"
+    )
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(L_ARM, 42, name="x")  # type: ignore[arg-type]
+    assert str(info.value) == (
+        "42 is not a resource (needed as a part of a CompoundResource); "
+        "declare it as Resource('name') or CompoundResource(...)"
+    )
+
+
+def test_invalid_resource_errors_are_type_errors() -> None:
+    with pytest.raises(TypeError):
+        CompoundResource(None)  # type: ignore[arg-type]
+
+
+def test_empty_compound_and_bad_names_are_rejected() -> None:
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(name="nothing")
+    assert str(info.value) == (
+        "CompoundResource needs at least one part, got none; e.g. CompoundResource(A, B)"
+    )
+    with pytest.raises(InvalidResourceError) as info:
+        Resource("")
+    assert str(info.value) == "a resource name must be a non-empty string, got ''"
+    with pytest.raises(InvalidResourceError) as info:
+        Resource(3)  # type: ignore[arg-type]
+    assert str(info.value) == "a resource name must be a non-empty string, got 3"
+    with pytest.raises(InvalidResourceError, match=r"got 7$"):
+        CompoundResource(L_ARM, name=7)  # type: ignore[arg-type]
