@@ -43,12 +43,19 @@ from .actions import BoundAction as BoundAction
 from .actions import Outcome as Outcome
 from .actions import action as action
 from .actions import lock as lock
+from .poses import FrameProvider as FrameProvider
+from .poses import FrameTree as FrameTree
+from .poses import Pose as Pose
+from .poses import PoseLike as PoseLike
+from .poses import PoseManager as PoseManager
 from .resources import CompoundResource as CompoundResource
 from .resources import Resource as Resource
 from .resources import ResourceManager as ResourceManager
 from .robot import Backend as Backend
 from .robot import GenericRobot as GenericRobot
 from .robot import Robot as Robot
+from .state import StateSample as StateSample
+from .state import StateStore as StateStore
 
 __version__ = "0.1.0"
 
@@ -68,6 +75,8 @@ __all__ = [
     "CorruptRecordingError",
     "EventKind",
     "ExecEvent",
+    "FrameProvider",
+    "FrameTree",
     "GenericRobot",
     "Instrument",
     "InvalidConditionError",
@@ -77,7 +86,10 @@ __all__ = [
     "LockstepError",
     "ModelLoadError",
     "Outcome",
+    "Pose",
     "PoseError",
+    "PoseLike",
+    "PoseManager",
     "PyRobotsError",
     "RecordingError",
     "Resource",
@@ -88,6 +100,8 @@ __all__ = [
     "SimulationError",
     "SimulationUnavailableError",
     "StateError",
+    "StateSample",
+    "StateStore",
     "TooManyActions",
     "UnknownFrameError",
     "UnknownStateKeyError",

@@ -16,6 +16,7 @@ from .._core._instrument import Instrument, Instruments
 from .._exceptions import ActionDefinitionError, ActionError, PyRobotsError
 from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
 from ..actions import render_tree as _render_tree
+from ..poses import PoseManager
 from ..resources import ResourceManager
 from ..state import StateStore
 from ._monitoring import StateMethods
@@ -79,6 +80,7 @@ class Robot(StateMethods):
         )
         self.resources: ResourceManager[ActionHandle[Any]] = ResourceManager(self.instruments)
         self.state = StateStore()
+        self.poses = PoseManager()
         self.backend = backend
         for item in actions:
             self._attach(item)

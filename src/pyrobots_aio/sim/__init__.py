@@ -1,0 +1,29 @@
+"""The simulated robot: MuJoCo physics, SimRobot, and lockstep virtual time.
+
+Needs the ``sim`` extra (``pip install "pyrobots-aio[sim]"``). ``run(main)``
+runs ``main`` on a virtual-time loop whose clock *is* simulation time.
+"""
+
+from .._core._clock import is_virtual as is_virtual
+from .._core._clock import new_virtual_loop as new_virtual_loop
+from .._core._clock import run as run
+from ._backend import SimBackend as SimBackend
+from ._frames import WorldFrames as WorldFrames
+from ._models import model_path as model_path
+from ._models import models_dir as models_dir
+from ._robot import WHEELS as WHEELS
+from ._robot import SimRobot as SimRobot
+from ._world import SimWorld as SimWorld
+
+__all__ = [
+    "WHEELS",
+    "SimBackend",
+    "SimRobot",
+    "SimWorld",
+    "WorldFrames",
+    "is_virtual",
+    "model_path",
+    "models_dir",
+    "new_virtual_loop",
+    "run",
+]

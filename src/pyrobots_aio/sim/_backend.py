@@ -1,0 +1,127 @@
+"""The simulator's control loop: step physics and publish sensors every control tick.
+
+Each tick is a plain loop callback (no task) scheduled with ``call_at`` at
+``start + k * period`` for integer ``k``, so lockstep time stays exact. A tick
+steps MuJoCo, writes every sensor to ``robot.state`` in one batch (monitors
+see each tick's values), then runs the controllers the motion actions
+registered. In lockstep the loop's virtual clock jumps from tick to tick; in
+real time the same code runs against the wall clock.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import TYPE_CHECKING
+
+from .._core._clock import is_virtual
+from .._exceptions import LockstepError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from ..robot import Robot
+    from ._world import SimWorld
+
+_log = logging.getLogger("pyrobots_aio.sim")
+
+
+class SimBackend:
+    """Runs a `SimWorld` in step with the event loop and publishes it to a robot.
+
+    Args:
+        world: The physics.
+        control_rate: Control ticks per second (sensors published, controllers run).
+        realtime: False for lockstep virtual time (the loop must be virtual),
+            True for the wall clock.
+    """
+
+    def __init__(self, world: SimWorld, *, control_rate: float = 50.0, realtime: bool = False):
+        steps = round(1.0 / (control_rate * world.physics_dt))
+        if steps < 1 or abs(steps * world.physics_dt * control_rate - 1.0) > 1e-9:
+            msg = (
+                f"control_rate {control_rate!r} Hz is not a whole number of physics steps of "
+                f"{world.physics_dt} s; pick a rate such as 50 or 100"
+            )
+            raise ValueError(msg)
+        self.world = world
+        self.realtime = realtime
+        self.steps_per_tick = steps
+        self.period = steps * world.physics_dt
+        self.ticks = 0
+        self._robot: Robot | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._timer: asyncio.TimerHandle | None = None
+        self._t0 = 0.0
+        self._controllers: dict[Callable[[], bool], asyncio.Future[None]] = {}
+
+    async def start(self, robot: Robot) -> None:
+        """Publish the first sensor readings and start ticking."""
+        loop = asyncio.get_running_loop()
+        if not self.realtime and not is_virtual(loop):
+            msg = (
+                "this simulated robot runs in lockstep virtual time (realtime=False), but the "
+                "event loop is an ordinary one; start it with pyrobots_aio.sim.run(main) or the "
+                "pytest marker @pytest.mark.virtual_time, or pass realtime=True"
+            )
+            raise LockstepError(msg)
+        self._robot, self._loop = robot, loop
+        robot.state.update(self.world.read_sensors())
+        self._t0 = loop.time()
+        self.ticks = 0
+        self._timer = loop.call_at(self._t0 + self.period, self._tick)
+
+    async def stop(self) -> None:
+        """Stop the wheels and the ticking; fail whatever still waits on a controller."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self.world.stop()
+        for fut in self._controllers.values():
+            if not fut.done():
+                fut.cancel()
+        self._controllers.clear()
+        self._robot = None
+
+    async def control(self, controller: Callable[[], bool]) -> None:
+        """Call ``controller()`` after every tick until it returns True.
+
+        The controller reads the fresh sensors and sets the wheel command; the
+        motion actions are built on it. Cancelling the wait removes it.
+        """
+        if self._loop is None:
+            msg = "the simulated robot is not running; use 'async with robot:' first"
+            raise LockstepError(msg)
+        fut = self._loop.create_future()
+        self._controllers[controller] = fut
+        try:
+            await fut
+        finally:
+            self._controllers.pop(controller, None)
+
+    def _tick(self) -> None:
+        robot, loop = self._robot, self._loop
+        if robot is None or loop is None:
+            return
+        self.ticks += 1
+        self._timer = loop.call_at(self._t0 + (self.ticks + 1) * self.period, self._tick)
+        self.world.step(self.steps_per_tick)
+        robot.state.update(self.world.read_sensors())
+        if self._controllers:
+            self._run_controllers()
+
+    def _run_controllers(self) -> None:
+        for controller, fut in list(self._controllers.items()):
+            if fut.done():
+                continue
+            try:
+                finished = controller()
+            except Exception as exc:  # the waiting action gets the error
+                fut.set_exception(exc)
+                continue
+            if finished:
+                fut.set_result(None)
+
+    def __repr__(self) -> str:
+        mode = "realtime" if self.realtime else "lockstep"
+        return f"<SimBackend {mode} {1 / self.period:g} Hz tick {self.ticks}>"

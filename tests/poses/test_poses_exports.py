@@ -1,0 +1,59 @@
+"""The public names of `pyrobots_aio.poses`, and its place in the layers."""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+import pyrobots_aio.poses
+
+POSES_DIR = Path(pyrobots_aio.poses.__file__).parent
+THIRD_PARTY = {"numpy", "transforms3d"}
+
+
+def test_exported_names_are_pinned() -> None:
+    assert pyrobots_aio.poses.__all__ == [
+        "EDGE_TOLERANCE",
+        "UNIT_TOLERANCE",
+        "FrameProvider",
+        "FrameTree",
+        "Pose",
+        "PoseLike",
+        "PoseManager",
+    ]
+    for name in pyrobots_aio.poses.__all__:
+        assert getattr(pyrobots_aio.poses, name) is not None
+
+
+def _imports(path: Path) -> list[str]:
+    """Every import of a module, as 'numpy', '.x' (this package) or '..x' (the parent)."""
+    found: list[str] = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found.extend(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            found.append("." * node.level + (node.module or ""))
+    return found
+
+
+def test_poses_imports_only_stdlib_numpy_transforms3d_and_exceptions() -> None:
+    modules = sorted(POSES_DIR.glob("*.py"))
+    assert [m.name for m in modules] == [
+        "__init__.py",
+        "_frames.py",
+        "_manager.py",
+        "_math.py",
+        "_parse.py",
+        "_pose.py",
+    ]
+    for module in modules:
+        for name in _imports(module):
+            top = name.split(".")[0]
+            allowed = (
+                (name.startswith(".") and not name.startswith(".."))
+                or name == ".._exceptions"
+                or top in THIRD_PARTY
+                or top in sys.stdlib_module_names
+            )
+            assert allowed, f"{module.name} imports {name}"
