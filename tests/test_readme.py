@@ -29,9 +29,15 @@ def test_every_python_snippet_runs(tmp_path: Path) -> None:
     snippets = blocks("python")
     assert snippets
     for number, code in enumerate(snippets):
-        script = tmp_path / f"snippet_{number}.py"
+        script = tmp_path / f"test_snippet_{number}.py"
         script.write_text(code)
+        runner = ["-m", "pytest", "-q", "-p", "no:cacheprovider"] if "def test_" in code else []
         done = subprocess.run(
-            [sys.executable, str(script)], capture_output=True, text=True, timeout=120, check=False
+            [sys.executable, *runner, str(script)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=False,
+            cwd=tmp_path,
         )
-        assert done.returncode == 0, done.stderr
+        assert done.returncode == 0, done.stdout + done.stderr

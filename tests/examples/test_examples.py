@@ -60,3 +60,43 @@ async def test_embedded() -> None:
     assert running == [{"id": 1, "name": "patrol", "state": "running", "parent": None}]
     assert missing == {"error": "no route GET /nope"}
     assert after == []
+
+
+@pytest.mark.asyncio
+@pytest.mark.virtual_time
+async def test_master_controller() -> None:
+    report = await load_example("master_controller").main()
+    assert report == [
+        "grasp_cup: cup grasped",
+        "lift failed (arm controller timeout (attempt 1)); retrying in 0.1 s",
+        "lift failed (arm controller timeout (attempt 2)); retrying in 0.2 s",
+        "lift: cup lifted",
+        "camera stream degraded: 6 Hz",
+        "plan interrupted: emergency stop",
+        "e-stop: everything cancelled, motors off",
+        "safe pose",
+        "pose safe, motors off",
+    ]
+
+
+@pytest.mark.asyncio
+@pytest.mark.virtual_time
+async def test_random_walk_completes_with_every_bump_handled() -> None:
+    report = await load_example("random_walk").main(seed=3)
+    assert report.moves == 10
+    assert report.bumps >= 1
+    assert report.interrupted >= 1
+    assert report.docked
+
+
+@pytest.mark.asyncio
+@pytest.mark.virtual_time
+async def test_kindergarten_session() -> None:
+    session = await load_example("kindergarten").main(minutes=5, seed=1)
+    assert session.minutes == 5
+    assert 5 * 60 <= session.reactions["look"] <= 5 * 60 + 1  # one per second of the session
+    assert session.reactions["blink"] > 5 * 60 / 6
+    assert session.reactions["giggle"] > 0
+    assert session.reactions["cry"] + session.reactions["thank"] > 0
+    assert session.actions_per_minute > 60
+    assert session.cap_hits == 0

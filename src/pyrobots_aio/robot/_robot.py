@@ -16,6 +16,7 @@ from .._core._instrument import Instrument, Instruments
 from .._exceptions import ActionDefinitionError, ActionError, PyRobotsError
 from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
 from ..actions import render_tree as _render_tree
+from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager
 from ..state import StateStore
@@ -80,6 +81,7 @@ class Robot(StateMethods):
         )
         self.resources: ResourceManager[ActionHandle[Any]] = ResourceManager(self.instruments)
         self.state = StateStore()
+        self.events = EventManager(self, self.state, self._executive, self.instruments)
         self.poses = PoseManager()
         self.backend = backend
         for item in actions:
@@ -148,6 +150,7 @@ class Robot(StateMethods):
 
     async def _stop_monitoring(self) -> None:
         """Stop event monitors before actions are cancelled; subclasses extend this."""
+        await self.events.cancel_all()
 
     async def _stop(self) -> None:
         """Stop the backend once every action is done; subclasses extend this."""

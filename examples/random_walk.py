@@ -1,0 +1,35 @@
+"""Random walk with a bumper reflex on the simulated robot (lockstep virtual time).
+
+The behaviour itself lives in `pyrobots_aio.sim.random_walk` so that the
+``pyrobots-aio demo random-walk`` command can run it too; read it there. This
+script runs it, as fast as the CPU allows, and prints what happened.
+
+Run: ``python examples/random_walk.py [--seed N] [--duration SECONDS]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+
+from pyrobots_aio.sim import SimRobot, run
+from pyrobots_aio.sim.random_walk import WalkReport, random_walk
+
+
+async def main(seed: int = 0, duration: float | None = None) -> WalkReport:
+    async with SimRobot(seed=seed) as robot:
+        return await random_walk(robot, duration=duration, seed=seed)
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--duration", type=float, default=None, help="simulated seconds")
+    options = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
+    report = run(main, options.seed, options.duration)
+    print(
+        f"{report.moves} moves, {report.bumps} bumps handled, {report.interrupted} moves "
+        f"interrupted, {'docked' if report.docked else 'NOT docked'}, "
+        f"{report.sim_time:.1f} s simulated"
+    )

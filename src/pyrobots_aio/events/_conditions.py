@@ -1,0 +1,228 @@
+"""Monitor conditions: the ``**cond`` keywords, their validation and their truth test.
+
+A condition turns a value of the watched key into "holds" or "does not hold".
+Level conditions (``value``, ``above``, ``below``, predicates) fire while it
+holds; edge conditions (``becomes``, ``increase``, ``decrease``) fire on each
+change into holding. ``increase``/``decrease`` compare with a reference: the
+value at the last firing (initially the value when the monitor was created).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass
+from numbers import Real
+from typing import TYPE_CHECKING, Any, TypedDict, TypeGuard
+
+from .._exceptions import InvalidConditionError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping
+
+KINDS = ("value", "becomes", "above", "below", "increase", "decrease")
+EDGES = frozenset({"becomes", "increase", "decrease"})
+_RELATIVE = frozenset({"increase", "decrease"})
+_NUMERIC = frozenset({"above", "below", "increase", "decrease"})
+_ALL = (*KINDS, "held_for")
+_LISTED = "value=, becomes=, above=, below=, increase=, decrease="
+
+
+class Conditions(TypedDict, total=False):
+    """The condition keywords of `EventManager.whenever`, `on` and `wait` (give one).
+
+    Attributes:
+        value: Level: holds while the key equals this value.
+        becomes: Edge: fires on each change of the key into this value.
+        above: Level: holds while the key is greater than this number.
+        below: Level: holds while the key is less than this number.
+        increase: Edge: fires when the key rose by at least this much since
+            the last firing (initially: since the monitor was created).
+        decrease: Edge: fires when the key fell by at least this much since
+            the last firing (initially: since the monitor was created).
+        held_for: Seconds the condition must hold before it fires; combines
+            with any one of the others, or with a predicate.
+    """
+
+    value: object
+    becomes: object
+    above: float
+    below: float
+    increase: float
+    decrease: float
+    held_for: float
+
+
+@dataclass(frozen=True, slots=True)
+class Condition:
+    """A validated condition.
+
+    Attributes:
+        kind: One of `KINDS`, or None for a predicate (its result is the condition).
+        target: The value or threshold given with ``kind``.
+        held_for: Seconds it must hold before firing (0: fire at once).
+    """
+
+    kind: str | None
+    target: object = None
+    held_for: float = 0.0
+
+    @property
+    def edge(self) -> bool:
+        """Whether it fires on changes into holding rather than while holding."""
+        return self.kind in EDGES
+
+    @property
+    def relative(self) -> bool:
+        """Whether it compares with a reference that moves at each firing."""
+        return self.kind in _RELATIVE
+
+    def describe(self) -> str:
+        """The condition as keywords, e.g. ``below=0.3 held_for=2.0`` ('' for a bare predicate)."""
+        parts = [] if self.kind is None else [f"{self.kind}={self.target!r}"]
+        if self.held_for:
+            parts.append(f"held_for={self.held_for!r}")
+        return " ".join(parts)
+
+    def test(self) -> Callable[[Any, Any], bool]:
+        """The truth test ``holds(value, reference)`` of a key condition."""
+        return _TESTS[self.kind or "value"](self.target)
+
+
+# State values are untyped (Any): a test may meet anything a backend or user wrote.
+
+
+def _equals(target: Any) -> Callable[[Any, Any], bool]:
+    return lambda value, _ref: bool(value == target)
+
+
+def _above(target: Any) -> Callable[[Any, Any], bool]:
+    return lambda value, _ref: value is not None and bool(value > target)
+
+
+def _below(target: Any) -> Callable[[Any, Any], bool]:
+    return lambda value, _ref: value is not None and bool(value < target)
+
+
+def _increase(target: Any) -> Callable[[Any, Any], bool]:
+    return lambda value, ref: value is not None and ref is not None and bool(value - ref >= target)
+
+
+def _decrease(target: Any) -> Callable[[Any, Any], bool]:
+    return lambda value, ref: value is not None and ref is not None and bool(ref - value >= target)
+
+
+_TESTS: dict[str, Callable[[Any], Callable[[Any, Any], bool]]] = {
+    "value": _equals,
+    "becomes": _equals,
+    "above": _above,
+    "below": _below,
+    "increase": _increase,
+    "decrease": _decrease,
+}
+
+
+def parse(var: str | None, cond: Mapping[str, object]) -> Condition:
+    """Validate the keywords given for a monitor on key ``var`` (None: a predicate).
+
+    Raises:
+        InvalidConditionError: Unknown keyword, none or two conditions, a wrong
+            type or value, or a key condition given with a predicate.
+    """
+    for name in cond:
+        if name not in _ALL:
+            raise InvalidConditionError(_unknown(name))
+    held_for = _held_for(cond["held_for"]) if "held_for" in cond else 0.0
+    given = [name for name in KINDS if name in cond]
+    if var is None:
+        if given:
+            raise InvalidConditionError(
+                f"{given[0]}= does not apply to a predicate: the predicate is the condition "
+                "(return True while it holds); only held_for= may be added"
+            )
+        return Condition(None, None, held_for)
+    if not given:
+        raise InvalidConditionError(
+            f"monitor on {var!r} has no condition; give one of {_LISTED} "
+            "(held_for= may be added to it)"
+        )
+    if len(given) > 1:
+        shown = ", ".join(f"{name}={cond[name]!r}" for name in given)
+        raise InvalidConditionError(
+            f"monitor on {var!r} has {len(given)} conditions ({shown}); give only one "
+            "(held_for= is the one that combines), or watch a predicate for a compound condition"
+        )
+    kind = given[0]
+    target = _number(kind, cond[kind]) if kind in _NUMERIC else cond[kind]
+    return Condition(kind, target, held_for)
+
+
+def check_frequency(max_firing_freq: object) -> float:
+    """Validate ``max_firing_freq``; return it as a float."""
+    if not _is_number(max_firing_freq) or not 0 <= max_firing_freq < math.inf:
+        raise InvalidConditionError(
+            "max_firing_freq must be a number of firings per second >= 0 (0: unlimited), "
+            f"got {max_firing_freq!r}"
+        )
+    return float(max_firing_freq)
+
+
+def check_poll(poll: object, var: str | None) -> float | None:
+    """Validate ``poll`` (predicates only); return it as a float or None."""
+    if poll is None:
+        return None
+    if var is not None:
+        raise InvalidConditionError(
+            f"poll= applies to predicates; the key {var!r} is checked on every write: drop poll="
+        )
+    if not _is_number(poll) or not 0 < poll < math.inf:
+        raise InvalidConditionError(f"poll= must be a number of seconds > 0 or None, got {poll!r}")
+    return float(poll)
+
+
+def check_blocking(blocking: object) -> bool:
+    """Validate ``blocking``."""
+    if not isinstance(blocking, bool):
+        raise InvalidConditionError(f"blocking must be True or False, got {blocking!r}")
+    return blocking
+
+
+def check_numeric_key(key: str, condition: Condition, current: object) -> None:
+    """Refuse a numeric condition on a key that holds something other than a number or None."""
+    if condition.kind in _NUMERIC and current is not None and not isinstance(current, Real):
+        raise InvalidConditionError(
+            f"{condition.kind}= compares numbers, but state key {key!r} holds {current!r} "
+            f"({type(current).__name__}); use value= or becomes=, or a predicate"
+        )
+
+
+def _is_number(value: object) -> TypeGuard[float]:
+    if isinstance(value, bool) or not isinstance(value, Real):
+        return False
+    return not math.isnan(value)
+
+
+def _number(kind: str, target: object) -> float:
+    positive = kind in _RELATIVE
+    if not _is_number(target) or (positive and not 0 < target < math.inf):
+        what = "a positive number" if positive else "a number"
+        example = "0.5" if positive else "0.3"
+        raise InvalidConditionError(
+            f"{kind}= must be {what}, got {target!r} ({type(target).__name__}); "
+            f"write e.g. {kind}={example}"
+        )
+    return target
+
+
+def _held_for(seconds: object) -> float:
+    if not _is_number(seconds) or not 0 <= seconds < math.inf:
+        raise InvalidConditionError(
+            f"held_for= must be a number of seconds >= 0, got {seconds!r}; write e.g. held_for=2.0"
+        )
+    return float(seconds)
+
+
+def _unknown(name: str) -> str:
+    closest = difflib.get_close_matches(name, _ALL, n=1)
+    hint = f" (did you mean {closest[0]}=?)" if closest else ""
+    return f"unknown condition {name!r}{hint}; conditions are {_LISTED} and held_for="

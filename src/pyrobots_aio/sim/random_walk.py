@@ -1,0 +1,112 @@
+"""The Create 3 random walk with a bumper reflex, done right.
+
+The hobbyist ROS 2 script this follows undocks, drives out, makes ten random
+turns and drives, and docks; its bumper reflex cancelled the current goal, and
+control never came back to the walk. Here the reflex is an action that locks
+the wheels with a higher priority and ``preempt=True``: the current motion is
+cancelled (its cleanup stops the wheels), the reflex backs off and turns away,
+and the walk — which sees `ActionInterrupted`, an ordinary exception — simply
+goes on with its next move once the reflex has released the wheels.
+
+Run it with ``pyrobots-aio demo random-walk`` or ``python examples/random_walk.py``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import random
+from dataclasses import dataclass
+
+from .._exceptions import ActionInterrupted
+from ..actions import action, lock
+from ._robot import WHEELS, SimRobot
+
+_log = logging.getLogger("pyrobots_aio.sim.random_walk")
+
+REFLEX_PRIORITY = 10
+"""The bumper reflex outranks every ordinary motion (priority 0)."""
+BACK_OFF = 0.15
+"""Metres the reflex backs off after a bump."""
+DOCK_ATTEMPTS = 3
+
+
+@dataclass(frozen=True, slots=True)
+class WalkReport:
+    """What a random walk did.
+
+    Attributes:
+        moves: Turn-and-drive moves attempted.
+        bumps: Bumper presses the reflex handled.
+        interrupted: Moves the reflex preempted.
+        docked: Whether the robot ended on its dock.
+        sim_time: Simulated seconds the walk took.
+    """
+
+    moves: int
+    bumps: int
+    interrupted: int
+    docked: bool
+    sim_time: float
+
+
+@action
+@lock(WHEELS, priority=REFLEX_PRIORITY, preempt=True)
+async def bumper_reflex(robot: SimRobot) -> None:
+    """Back off, then turn away from the side that was hit (both sides: turn round)."""
+    left, right = robot.state.bumper_left, robot.state.bumper_right
+    turn = -0.9 if left and not right else 0.9 if right and not left else 0.75 * math.pi
+    _log.info("bump (left=%s right=%s): backing off and turning %.2f rad", left, right, turn)
+    await robot.drive_distance(-BACK_OFF)
+    await robot.rotate_angle(turn)
+
+
+@action
+async def move(robot: SimRobot, angle: float, distance: float) -> None:
+    """One random-walk move: turn by ``angle``, then drive ``distance``."""
+    await robot.rotate_angle(angle)
+    await robot.drive_distance(distance)
+
+
+async def random_walk(
+    robot: SimRobot, *, moves: int = 10, duration: float | None = None, seed: int = 0
+) -> WalkReport:
+    """Undock, drive out, make random moves, dock; a bumper reflex handles collisions.
+
+    Args:
+        robot: A running simulated robot (it starts docked).
+        moves: Random turn-and-drive moves to make.
+        duration: If given, keep making moves until this many simulated seconds
+            have passed since the start (at least ``moves`` moves are made first).
+        seed: Seeds the choice of moves.
+    """
+    rng = random.Random(seed)
+    start = robot.time()
+    reflex = robot.whenever("bumper", becomes=True).do(bumper_reflex)
+    done = interrupted = 0
+    try:
+        await robot.undock()
+        await robot.drive_distance(0.5)
+        while done < moves or (duration is not None and robot.time() - start < duration):
+            angle, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.3, 1.0)
+            try:
+                await move(robot, angle, distance)
+            except ActionInterrupted as stop:
+                interrupted += 1
+                _log.info("move %d interrupted: %s", done + 1, stop.reason)
+            done += 1
+        docked = await _dock(robot)
+    finally:
+        await reflex.close()
+    return WalkReport(done, reflex.firings, interrupted, docked, robot.time() - start)
+
+
+async def _dock(robot: SimRobot) -> bool:
+    for attempt in range(1, DOCK_ATTEMPTS + 1):
+        try:
+            await robot.dock()
+        except ActionInterrupted:
+            _log.info("docking attempt %d interrupted by a bump; trying again", attempt)
+        else:
+            return True
+    return bool(robot.state.docked)
