@@ -43,6 +43,8 @@ from .actions import BoundAction as BoundAction
 from .actions import Outcome as Outcome
 from .actions import action as action
 from .actions import lock as lock
+from .events import EventManager as EventManager
+from .events import EventMonitor as EventMonitor
 from .poses import FrameProvider as FrameProvider
 from .poses import FrameTree as FrameTree
 from .poses import Pose as Pose
@@ -74,6 +76,8 @@ __all__ = [
     "CompoundResource",
     "CorruptRecordingError",
     "EventKind",
+    "EventManager",
+    "EventMonitor",
     "ExecEvent",
     "FrameProvider",
     "FrameTree",
