@@ -52,6 +52,7 @@ async def test_drive_distance_and_rotate_angle_reach_their_targets() -> None:
         assert turned == pytest.approx(-math.pi / 2, abs=0.006)
         back = await robot.drive_distance(-0.3)
         assert back == pytest.approx(-0.3, abs=0.003)
+        await robot.sleep(0.1)  # the wheels were stopped; the next ticks publish it
         assert robot.state.v == pytest.approx(0.0, abs=0.01)
 
 
