@@ -8,7 +8,7 @@ nox.options.default_venv_backend = "uv|venv"
 nox.options.sessions = ["lint", "typecheck", "tests", "examples"]
 nox.options.reuse_existing_virtualenvs = True
 
-INSTALL = ".[sim,test]"
+INSTALL = ".[sim,mcap,test]"
 
 
 @nox.session
@@ -43,5 +43,5 @@ def examples(session: nox.Session) -> None:
 @nox.session
 def bench(session: nox.Session) -> None:
     """Benchmarks: print a table and write bench-results.json."""
-    session.install("-e", INSTALL)
+    session.install("-e", INSTALL, "py_trees>=2.2")  # py_trees: the side-by-side comparison
     session.run("python", "-m", "tests.bench", *session.posargs)
