@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import shutil
+
 import nox
 
 nox.options.default_venv_backend = "uv|venv"
@@ -30,6 +32,9 @@ def typecheck(session: nox.Session) -> None:
 def tests(session: nox.Session) -> None:
     """The test suite (virtual time where time matters)."""
     session.install("-e", INSTALL)
+    if shutil.which("chromium") is None:  # the timeline test opens the page in a real browser
+        session.run("apt-get", "update", "-qq", external=True)
+        session.run("apt-get", "install", "-y", "-qq", "chromium", external=True)
     session.run("pytest", *session.posargs, env={"MUJOCO_GL": "egl"})
 
 

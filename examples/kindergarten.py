@@ -17,14 +17,12 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import math
 import random
 from collections import Counter
 from dataclasses import dataclass
 
 from pyrobots_aio import (
-    ActionInterrupted,
     EventKind,
     ExecEvent,
     Robot,
@@ -109,8 +107,7 @@ async def look_at_child(robot: Kid) -> None:
 async def wander(robot: Kid, rng: random.Random) -> None:
     await robot.undock()
     while True:
-        with contextlib.suppress(ActionInterrupted):  # the bumper reflex took over: go on
-            await move(robot, rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 0.8))
+        await move(robot, rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 0.8))  # may be cut short
         await robot.sleep(rng.uniform(5.0, 20.0))
 
 

@@ -275,3 +275,27 @@ async def test_instruments_see_every_action_event() -> None:
     assert recorder.events[2].data == {"reason": "bored", "by": None}
     assert recorder.events[3].data == {"outcome": "cancelled", "error": None}
     assert {e.action for e in recorder.events} == {handle.id}
+
+
+@pytest.mark.asyncio
+async def test_an_action_waiting_for_a_lock_reports_where_it_is_defined() -> None:
+    from pyrobots_aio import Resource, lock
+
+    arm = Resource("arm")
+
+    @action
+    @lock(arm)
+    async def wave(robot: Robot) -> None:
+        await robot.sleep(1)
+
+    async with Robot() as robot:
+        first, second = wave(robot), wave(robot)
+        await robot.sleep(0.5)
+        info = robot.actioninfo(second.id)
+        assert info.state is ActionState.WAITING
+        assert info.awaiting == ("arm",)
+        line = wave.fn.__wrapped__.__code__.co_firstlineno  # type: ignore[attr-defined]
+        assert info.location is not None
+        assert info.location.endswith(f"test_lifecycle.py:{line}")
+        await first
+        await second

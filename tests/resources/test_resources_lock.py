@@ -98,7 +98,9 @@ async def test_held_and_awaiting_show_in_introspection() -> None:
         assert infos[wave.id].awaiting == ("l_arm",)
         assert infos[wave.id].held == ()
         assert wave.state is ActionState.WAITING
-        assert robot.action_tree().splitlines()[1] == f"wave_hand#{wave.id} waiting waits for l_arm"
+        line = robot.action_tree().splitlines()[1]
+        assert line.startswith(f"wave_hand#{wave.id} waiting waits for l_arm at ")
+        assert line.endswith("test_resources_lock.py:45")  # where wave_hand is defined
         robot.gate.set()
         await wave
         assert wave.held == ()

@@ -123,6 +123,7 @@ class Executive:
         self._next_id = ident + 1
         handle: ActionHandle[T] = ActionHandle(self, ident, name, parent, loop.time())
         coro = fn(*args, **kwargs)
+        handle._fn = fn
         handle._task = loop.create_task(drive(handle, coro), name=f"{name}#{ident}")
         self._running[ident] = handle
         if parent is None:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from .._exceptions import ActionInterrupted, ActionSkipped
 from ._context import current_action
-from ._where import location
+from ._where import definition, location
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Generator
@@ -81,6 +81,7 @@ class ActionHandle(Generic[T]):
         "_error",
         "_executive",
         "_finalizers",
+        "_fn",
         "_outcome",
         "_phase",
         "_task",
@@ -116,6 +117,7 @@ class ActionHandle(Generic[T]):
         self._children: dict[ActionHandle[Any], None] = {}
         self._task: asyncio.Task[None] | None = None
         self._coro: Coroutine[Any, Any, T] | None = None
+        self._fn: Callable[..., object] | None = None
         self._phase = _PENDING
         self._outcome = Outcome.NOT_DONE
         self._value: T | None = None
@@ -239,7 +241,10 @@ class ActionHandle(Generic[T]):
         """Return the ``file:line`` where the action's body is now suspended, if it runs."""
         if self._coro is None or self._phase != _RUNNING:
             return None
-        return location(self._coro)
+        where = location(self._coro)
+        if where is None and self._fn is not None:  # only internal frames: waiting for a lock
+            where = definition(self._fn)
+        return where
 
     # -- cancelling -------------------------------------------------------
 

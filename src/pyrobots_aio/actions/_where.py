@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import inspect
 import os
+from collections.abc import Callable
 from typing import Any
 
 import anyio
@@ -23,7 +25,8 @@ def location(coro: Any) -> str | None:
     """Follow the await chain of ``coro`` down; return the innermost frame outside asyncio.
 
     Frames of asyncio, anyio and the executive itself are skipped, so a body
-    suspended in ``await robot.sleep(1)`` reports the line of that await.
+    suspended in ``await robot.sleep(1)`` reports the line of that await; when
+    every frame is internal (waiting for a lock), None.
     """
     where = None
     node = coro
@@ -38,3 +41,9 @@ def location(coro: Any) -> str | None:
             or getattr(node, "ag_await", None)
         )
     return where
+
+
+def definition(fn: Callable[..., object]) -> str | None:
+    """The ``file:line`` where ``fn`` (unwrapped from its decorators) is defined."""
+    code = getattr(inspect.unwrap(fn), "__code__", None)
+    return None if code is None else f"{code.co_filename}:{code.co_firstlineno}"

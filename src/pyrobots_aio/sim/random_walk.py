@@ -62,10 +62,18 @@ async def bumper_reflex(robot: SimRobot) -> None:
 
 
 @action
-async def move(robot: SimRobot, angle: float, distance: float) -> None:
-    """One random-walk move: turn by ``angle``, then drive ``distance``."""
-    await robot.rotate_angle(angle)
-    await robot.drive_distance(distance)
+async def move(robot: SimRobot, angle: float, distance: float) -> bool:
+    """One random-walk move: turn by ``angle``, then drive ``distance``.
+
+    Returns False if the bumper reflex preempted it (an outcome, not a failure).
+    """
+    try:
+        await robot.rotate_angle(angle)
+        await robot.drive_distance(distance)
+    except ActionInterrupted as stop:
+        _log.info("move interrupted: %s", stop.reason)
+        return False
+    return True
 
 
 async def random_walk(
@@ -89,11 +97,8 @@ async def random_walk(
         await robot.drive_distance(0.5)
         while done < moves or (duration is not None and robot.time() - start < duration):
             angle, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.3, 1.0)
-            try:
-                await move(robot, angle, distance)
-            except ActionInterrupted as stop:
+            if not await move(robot, angle, distance):
                 interrupted += 1
-                _log.info("move %d interrupted: %s", done + 1, stop.reason)
             done += 1
         docked = await _dock(robot)
     finally:

@@ -1,0 +1,7 @@
+"""``python -m pyrobots_aio.cli``: the ``pyrobots-aio`` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

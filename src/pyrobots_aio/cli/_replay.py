@@ -1,0 +1,58 @@
+"""``pyrobots-aio replay PATH [--timeline OUT.html]``: summarise a recording, draw its timeline.
+
+A corrupt or truncated recording is still summarised up to the bad line; the
+error, naming that line, follows the summary and the exit code is 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TextIO
+
+from pyrobots_aio import RecordingError
+from pyrobots_aio.recording import format_summary, load, render_timeline_html, summarize
+
+
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``replay`` command."""
+    replay = commands.add_parser(
+        "replay",
+        help="summarise a recording and draw its timeline",
+        description="Print the summary of a JSON Lines recording (actions and events per "
+        "minute, peak concurrency, durations per action, resource use, cancellations) and, "
+        "with --timeline, write its timeline as a self-contained HTML page.",
+    )
+    replay.add_argument(
+        "path", metavar="PATH", help="a recording (pyrobots-aio demo --record, JsonlRecorder)"
+    )
+    replay.add_argument("--timeline", metavar="OUT.html", help="write the timeline page here")
+    replay.set_defaults(command=run_replay)
+
+
+def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    """Run ``replay``; return the exit code."""
+    try:
+        recording = load(options.path, strict=False)
+    except RecordingError as exc:
+        print(f"pyrobots-aio: error: {exc}", file=err)
+        return 1
+    except OSError as exc:
+        print(f"pyrobots-aio: error: cannot read {options.path}: {exc.strerror}", file=err)
+        return 1
+    print(format_summary(summarize(recording)), file=out)
+    if options.timeline:
+        try:
+            Path(options.timeline).write_text(render_timeline_html(recording), encoding="utf-8")
+        except OSError as exc:
+            print(f"pyrobots-aio: error: cannot write {options.timeline}: {exc.strerror}", file=err)
+            return 1
+        print(f"\ntimeline written to {options.timeline}", file=out)
+    if recording.error is not None:
+        print(
+            f"pyrobots-aio: error: {recording.error}\n"
+            f"(the summary covers the {len(recording.events)} events before that line)",
+            file=err,
+        )
+        return 1
+    return 0

@@ -1,0 +1,57 @@
+"""Recording and replay: recorders on the instrumentation hook, summaries, timelines.
+
+Layer: on top; uses only the public API of ``pyrobots_aio``.
+
+Record a run, then read it back::
+
+    robot = SimRobot(seed=1)
+    with JsonlRecorder("run.jsonl", state_keys=["bumper", "v"]).attach(robot):
+        async with robot:
+            ...
+    recording = load("run.jsonl")
+    print(format_summary(summarize(recording)))
+    Path("run.html").write_text(render_timeline_html(recording))
+
+Recorders: `JsonlRecorder` (built in), `McapRecorder` (the ``mcap`` extra;
+opens in Foxglove), `MemoryRecorder` (in memory, for tests and the CLI).
+"""
+
+from ._format import format_summary as format_summary
+from ._jsonl import JsonlRecorder as JsonlRecorder
+from ._mcap import McapRecorder as McapRecorder
+from ._recorder import MemoryRecorder as MemoryRecorder
+from ._recorder import Recorder as Recorder
+from ._recording import FORMAT as FORMAT
+from ._recording import VERSION as VERSION
+from ._recording import Recording as Recording
+from ._recording import RecordingHeader as RecordingHeader
+from ._recording import load as load
+from ._summary import ActionStats as ActionStats
+from ._summary import Cancellation as Cancellation
+from ._summary import Failure as Failure
+from ._summary import Outcomes as Outcomes
+from ._summary import ResourceStats as ResourceStats
+from ._summary import Summary as Summary
+from ._summary import summarize as summarize
+from ._timeline import render_timeline_html as render_timeline_html
+
+__all__ = [
+    "FORMAT",
+    "VERSION",
+    "ActionStats",
+    "Cancellation",
+    "Failure",
+    "JsonlRecorder",
+    "McapRecorder",
+    "MemoryRecorder",
+    "Outcomes",
+    "Recorder",
+    "Recording",
+    "RecordingHeader",
+    "ResourceStats",
+    "Summary",
+    "format_summary",
+    "load",
+    "render_timeline_html",
+    "summarize",
+]

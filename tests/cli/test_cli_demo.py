@@ -1,0 +1,123 @@
+"""``pyrobots-aio demo random-walk`` end to end: a subprocess, a terminal, and the recording."""
+
+from __future__ import annotations
+
+import os
+import pty
+import subprocess
+import sys
+from typing import TYPE_CHECKING
+
+import pytest
+
+from pyrobots_aio import EventKind
+from pyrobots_aio.cli import main
+from pyrobots_aio.recording import format_summary, load, summarize
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from pyrobots_aio.recording import Recording
+
+COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk"]
+
+
+def _events(recording: Recording) -> list[tuple[str, float, int | None, str | None, object]]:
+    return [(e.kind.value, e.time, e.action, e.name, dict(e.data)) for e in recording.events]
+
+
+def test_the_demo_runs_records_and_summarises(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "walk.jsonl"
+    done = subprocess.run(
+        [*COMMAND, "--duration", "60", "--record", str(path), "--seed", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    out = done.stdout.splitlines()
+    # not a terminal: one plain line per notable event, while it runs
+    assert out[:2] == [
+        "    0.000  start    undock#1",
+        "    0.000  start    drive_distance#2 under undock#1",
+    ]
+    assert not any("\x1b[" in line for line in out)
+
+    recording = load(path)
+    summary = summarize(recording)
+    assert recording.complete
+    assert (recording.header.robot, recording.header.seed) == ("SimRobot", 1)
+    assert recording.header.metadata == {"demo": "random-walk"}
+    assert summary.duration >= 60
+    assert summary.actions > 20
+    assert {s.name for s in summary.per_action} >= {"undock", "move", "rotate_angle", "dock"}
+    assert [r.name for r in summary.resources] == ["wheels"]
+    samples = {e.name for e in recording.events if e.kind is EventKind.STATE_SAMPLE}
+    assert samples == {"bumper", "bumper_left", "bumper_right", "docked", "v", "w"}
+    for cancel in summary.cancellations:  # every bump is explained
+        assert cancel.by_name is not None
+        assert cancel.by_name.startswith("bumper_reflex#")
+        assert cancel.reason is not None
+        assert cancel.reason.startswith("preempted by bumper_reflex#")
+    reports = [line for line in out if line.startswith("random walk: ")]
+    assert len(reports) == 1
+    assert f"{summary.monitor_firings.get('bumper becomes=True', 0)} bumps" in reports[0]
+    assert reports[0].endswith("real time")
+    assert format_summary(summary) in done.stdout
+    assert done.stdout.endswith(
+        f"recorded to {path}; see its timeline with: pyrobots-aio replay {path} "
+        "--timeline run.html\n"
+    )
+
+    # the same seed, in-process this time: the very same run
+    again = tmp_path / "again.jsonl"
+    assert (
+        main(
+            ["-q", "demo", "random-walk", "--duration", "60", "--record", str(again), "--seed", "1"]
+        )
+        == 0
+    )
+    assert format_summary(summary) in capsys.readouterr().out
+    assert _events(load(again)) == _events(recording)
+
+
+def test_without_record_the_summary_comes_from_memory(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["-q", "demo", "random-walk", "--duration", "5", "--seed", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "SimRobot, seed 2: " in out
+    assert "closed cleanly" in out
+    assert "recorded to" not in out
+
+
+def _on_a_terminal(args: list[str]) -> tuple[int, str]:
+    leader, follower = pty.openpty()
+    env = {**os.environ, "COLUMNS": "100", "NO_COLOR": ""}
+    with subprocess.Popen(args, stdin=follower, stdout=follower, stderr=follower, env=env) as child:
+        os.close(follower)
+        output = b""
+        while True:
+            try:
+                chunk = os.read(leader, 65536)
+            except OSError:  # the child closed the terminal
+                break
+            if not chunk:
+                break
+            output += chunk
+        code = child.wait(timeout=300)
+    os.close(leader)
+    return code, output.decode()
+
+
+def test_on_a_terminal_the_status_is_redrawn_in_place() -> None:
+    code, output = _on_a_terminal([*COMMAND, "--duration", "30", "--seed", "1"])
+    assert code == 0, output
+    assert "\x1b[J" in output  # the live block is erased before each redraw
+    assert "random walk " in output
+    assert "  running undock#1 running holds wheels at _robot.py:" in output
+    assert "  state   bumper=False  docked=" in output
+    assert "\x1b[32mINFO   \x1b[0m sim.random_walk  bumper_reflex#" in output  # coloured log lines
+    assert "start    undock#1" not in output  # on a terminal, routine starts are not listed
+    assert "SimRobot, seed 1: " in output

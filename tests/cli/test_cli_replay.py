@@ -1,0 +1,122 @@
+"""``pyrobots-aio replay`` and the command's exit codes, run as a user would (a subprocess)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from typing import TYPE_CHECKING
+
+import pytest
+
+from pyrobots_aio.cli import main
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+SUMMARY = [
+    "Robot: 4.000 s recorded, 19 events, closed cleanly",
+    "  actions            4: 3 succeeded, 0 failed, 1 cancelled, 0 skipped, 0 not done",
+    "  actions per minute 60.0 mean; by minute: 4",
+    "  events per minute  0.0 mean (monitor firings); by minute: 0",
+    "  peak concurrency   2 actions at 0.000 s",
+    "",
+    "  action  count  ok  failed  cancelled  skipped  min s  median s  max s",
+    "  greet       1   1       0          0        0  3.000     3.000  3.000",
+    "  wave        3   2       0          1        0  1.000     1.000  2.000",
+    "",
+    "  resource  held s     use  acquired  waits  max wait s  preempted",
+    "  arm        4.000  100.0%         3      0       0.000          0",
+    "",
+    "  cancellations (1)",
+    "        4.000 s  wave#4 cancelled: bored",
+]
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "pyrobots_aio.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
+def test_replay_prints_the_summary_and_writes_the_timeline(recording: Path, tmp_path: Path) -> None:
+    page = tmp_path / "out.html"
+    done = _cli("replay", str(recording), "--timeline", str(page))
+    assert (done.returncode, done.stderr) == (0, "")
+    assert done.stdout.splitlines() == [*SUMMARY, "", f"timeline written to {page}"]
+    html = page.read_text()
+    assert html.count('<rect class="action ') == 4
+    assert html.count('<rect class="hold"') == 3
+
+
+def test_replay_of_a_truncated_recording_summarises_the_good_part(
+    recording: Path, tmp_path: Path
+) -> None:
+    lines = recording.read_text().splitlines(keepends=True)
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text("".join(lines[:8]) + lines[8][:30])
+    page = tmp_path / "cut.html"
+    done = _cli("replay", str(cut), "--timeline", str(page))
+    assert done.returncode == 1
+    assert done.stdout.splitlines()[:2] == [
+        "Robot: 1.000 s recorded, 7 events, NOT closed (incomplete)",
+        "  actions            2: 1 succeeded, 0 failed, 0 cancelled, 0 skipped, 1 not done",
+    ]
+    assert done.stderr.splitlines() == [
+        f"pyrobots-aio: error: {cut}:9: truncated line: it ends before its JSON object does "
+        "(was the recorder closed?)",
+        "(the summary covers the 7 events before that line)",
+    ]
+    assert "truncated line" in page.read_text()
+
+
+def test_replay_of_a_missing_file_fails_cleanly(tmp_path: Path) -> None:
+    missing = tmp_path / "nowhere.jsonl"
+    done = _cli("replay", str(missing))
+    assert (done.returncode, done.stdout) == (1, "")
+    assert done.stderr == f"pyrobots-aio: error: cannot read {missing}: No such file or directory\n"
+
+
+def test_replay_of_something_else_fails_cleanly(tmp_path: Path) -> None:
+    other = tmp_path / "notes.txt"
+    other.write_text("hello\n")
+    done = _cli("replay", str(other))
+    assert (done.returncode, done.stdout) == (1, "")
+    assert done.stderr == (
+        f"pyrobots-aio: error: {other}:1: not valid JSON: Expecting value at column 1\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        ((), "error: the following arguments are required: COMMAND"),
+        (("demo",), "error: the following arguments are required: DEMO"),
+        (("replay",), "error: the following arguments are required: PATH"),
+        (
+            ("demo", "random-walk", "--duration", "-1"),
+            "error: argument --duration: expected a positive number of seconds, got '-1'",
+        ),
+        (
+            ("demo", "random-walk", "--seed", "one"),
+            "error: argument --seed: invalid int value: 'one'",
+        ),
+        (("fly",), "error: argument COMMAND: invalid choice: 'fly'"),
+    ],
+)
+def test_usage_errors_exit_with_2(args: tuple[str, ...], message: str) -> None:
+    done = _cli(*args)
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr.startswith("usage: pyrobots-aio")
+    assert message in done.stderr
+
+
+def test_main_returns_the_exit_code(capsys: pytest.CaptureFixture[str], recording: Path) -> None:
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out == "pyrobots-aio 0.1.0\n"
+    assert main(["replay", str(recording)]) == 0
+    assert capsys.readouterr().out.splitlines() == SUMMARY
+    assert main(["replay"]) == 2

@@ -1,0 +1,85 @@
+"""The public names of `pyrobots_aio.recording` and `pyrobots_aio.cli`, their docstring
+examples, and their layer: they use only the public API of the packages below them."""
+
+from __future__ import annotations
+
+import ast
+import doctest
+import importlib
+from pathlib import Path
+
+import pytest
+
+import pyrobots_aio.cli
+import pyrobots_aio.recording
+
+SRC = Path(pyrobots_aio.recording.__file__).parent.parent
+
+
+def test_exported_names_are_pinned() -> None:
+    assert pyrobots_aio.recording.__all__ == [
+        "FORMAT",
+        "VERSION",
+        "ActionStats",
+        "Cancellation",
+        "Failure",
+        "JsonlRecorder",
+        "McapRecorder",
+        "MemoryRecorder",
+        "Outcomes",
+        "Recorder",
+        "Recording",
+        "RecordingHeader",
+        "ResourceStats",
+        "Summary",
+        "format_summary",
+        "load",
+        "render_timeline_html",
+        "summarize",
+    ]
+    assert pyrobots_aio.cli.__all__ == ["ConsoleHandler", "install_console_handler", "main"]
+    for package in (pyrobots_aio.recording, pyrobots_aio.cli):
+        for name in package.__all__:
+            assert getattr(package, name) is not None
+
+
+def _imported(path: Path) -> list[str]:
+    """Every module a file imports, absolute, or '..x' for a parent-relative import."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found += [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level != 1:
+            found.append("." * node.level + (node.module or ""))
+    return found
+
+
+@pytest.mark.parametrize("package", ["recording", "cli"])
+def test_only_the_public_api_below_is_used(package: str) -> None:
+    for path in sorted((SRC / package).glob("*.py")):
+        for module in _imported(path):
+            if module.startswith((".", "pyrobots_aio")):
+                private = [p for p in module.split(".") if p.startswith("_")]
+                assert not module.startswith("."), f"{path.name} imports {module} (relative)"
+                assert not private, f"{path.name} imports the private module {module}"
+
+
+@pytest.mark.parametrize(
+    "module",
+    [
+        "recording._format",
+        "recording._jsonl",
+        "recording._recorder",
+        "recording._recording",
+        "recording._summary",
+        "recording._timeline",
+        "cli._console",
+        "cli._main",
+    ],
+)
+def test_docstring_examples(module: str) -> None:
+    mod = importlib.import_module(f"pyrobots_aio.{module}")
+    result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS, raise_on_error=False)
+    assert result.failed == 0
+    if module in {"recording._format", "recording._recorder", "cli._console"}:
+        assert result.attempted > 0

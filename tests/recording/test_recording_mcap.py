@@ -1,0 +1,85 @@
+"""The MCAP recorder: JSON messages on JSON-schema channels (Foxglove), and its missing extra."""
+
+from __future__ import annotations
+
+import json
+import sys
+from typing import TYPE_CHECKING
+
+import pytest
+
+from pyrobots_aio import RecordingError
+from pyrobots_aio.recording import McapRecorder, MemoryRecorder
+
+if TYPE_CHECKING:
+    from collections.abc import Awaitable, Callable
+    from pathlib import Path
+
+    from conftest import Played
+    from pyrobots_aio.recording import Recorder
+
+    Scenario = Callable[[Recorder], Awaitable[Played]]
+
+MISSING = (
+    "McapRecorder needs the 'mcap' package, which is optional: install it with "
+    'pip install "pyrobots-aio[mcap]" (or pip install mcap), or record with JsonlRecorder'
+)
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_an_mcap_file_holds_every_event_on_json_schema_channels(
+    tmp_path: Path, record_scenario: Scenario
+) -> None:
+    from mcap.reader import make_reader  # the mcap extra; the test session installs it
+
+    path = tmp_path / "run.mcap"
+    await record_scenario(McapRecorder(path, state_keys=["bumper"]))
+    memory = MemoryRecorder(state_keys=["bumper"])
+    await record_scenario(memory)
+
+    with path.open("rb") as file:
+        reader = make_reader(file)
+        summary = reader.get_summary()
+        assert summary is not None
+        schemas = {
+            s.name: (s.encoding, json.loads(s.data)["type"]) for s in summary.schemas.values()
+        }
+        channels = {c.topic: c.message_encoding for c in summary.channels.values()}
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        messages = [(c.topic, json.loads(m.data), m.log_time) for _, c, m in reader.iter_messages()]
+
+    assert schemas == {
+        "pyrobots_aio.ExecEvent": ("jsonschema", "object"),
+        "pyrobots_aio.StateSample": ("jsonschema", "object"),
+    }
+    assert channels == {
+        "/pyrobots/state/bumper": "json",
+        "/pyrobots/actions": "json",
+        "/pyrobots/resources": "json",
+        "/pyrobots/monitors": "json",
+    }
+    assert json.loads(metadata["pyrobots_aio"]["robot"]) == "Robot"
+    assert metadata["pyrobots_aio.end"] == {"end": "5.5", "events": "49"}
+    assert len(messages) == len(memory.events) == 49
+    expected = [(e.kind.value, e.action, e.name) for e in memory.events]
+    assert [
+        (m.get("kind", "state.sample"), m.get("action"), m.get("name", m.get("key")))
+        for _, m, _ in messages
+    ] == expected
+    topics = {topic for topic, message, _ in messages if message.get("kind") == "monitor.fired"}
+    assert topics == {"/pyrobots/monitors"}
+    stamps = [stamp for _, _, stamp in messages]
+    assert stamps == sorted(stamps)
+    assert stamps[-1] - stamps[0] == 5_500_000_000  # loop seconds, in nanoseconds
+
+
+def test_without_the_mcap_extra_the_error_names_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setitem(sys.modules, "mcap.writer", None)  # as if mcap were not installed
+    with pytest.raises(RecordingError) as info:
+        McapRecorder(tmp_path / "run.mcap")
+    assert str(info.value) == MISSING
+    assert isinstance(info.value.__cause__, ImportError)
+    assert not (tmp_path / "run.mcap").exists()
