@@ -48,4 +48,3 @@ def run() -> dict[str, float]:
     figures["random_walk_sim_seconds"] = sim_time
     figures["random_walk_realtime_factor"] = sim_time / wall
     return figures
-

@@ -22,13 +22,13 @@ from pyrobots_aio.testing import EventLog
 
 pytestmark = pytest.mark.virtual_time
 
-SEEN: list[tuple[str, tuple[Any, ...], ActionHandle[Any] | None]] = []
+seen_calls: list[tuple[str, tuple[Any, ...], ActionHandle[Any] | None]] = []
 
 
 @action
 async def greet(robot: Robot, *args: Any) -> None:
     """An unbound module-level action: receives the robot first, then the args of do()."""
-    SEEN.append(("greet", (robot, *args), current_action.get().parent))  # type: ignore[union-attr]
+    seen_calls.append(("greet", (robot, *args), current_action.get().parent))  # type: ignore[union-attr]
 
 
 @action
@@ -40,12 +40,12 @@ async def pressing(robot: Robot) -> None:
 class Greeter(Robot):
     @action
     async def wave(self, *args: Any) -> None:
-        SEEN.append(("wave", args, current_action.get().parent))  # type: ignore[union-attr]
+        seen_calls.append(("wave", args, current_action.get().parent))  # type: ignore[union-attr]
 
 
 @pytest.fixture(autouse=True)
 def _clear_seen() -> None:
-    SEEN.clear()
+    seen_calls.clear()
 
 
 @pytest.mark.asyncio
@@ -56,7 +56,7 @@ async def test_an_unbound_action_gets_the_robot_first_and_runs_in_the_root_scope
         writer = pressing(robot)
         await robot.sleep(0.1)
         writer.cancel()
-    assert SEEN == [("greet", (robot, "hello", 2), None)]
+    assert seen_calls == [("greet", (robot, "hello", 2), None)]
 
 
 @pytest.mark.asyncio
@@ -67,7 +67,7 @@ async def test_a_bound_action_gets_only_the_args_of_do() -> None:
         writer = pressing(robot)
         await robot.sleep(0.1)
         writer.cancel()
-    assert SEEN == [("wave", ("hi",), None)]
+    assert seen_calls == [("wave", ("hi",), None)]
 
 
 @pytest.mark.asyncio
@@ -78,7 +78,7 @@ async def test_an_attached_action_callback_is_spawned_as_an_action() -> None:
         robot.whenever("bumper", becomes=True).do(robot.greet, 1)
         robot.state.bumper = True
         await robot.sleep(0.1)
-    assert SEEN == [("greet", (robot, 1), None)]
+    assert seen_calls == [("greet", (robot, 1), None)]
     fired = log.first(EventKind.MONITOR_FIRED, "bumper becomes=True")
     spawned = log.first(EventKind.ACTION_SPAWNED, "greet")
     assert log.events.index(fired) < log.events.index(spawned)
@@ -407,7 +407,8 @@ async def test_a_callback_that_ignores_cancellation_is_cancelled_again_then_aban
         records[1]
         .getMessage()
         .startswith(
-            f"{name}.<locals>.deaf of monitor 'button becomes=True' ignored cancellation for 1 s, at "
+            f"{name}.<locals>.deaf of monitor 'button becomes=True' "
+            "ignored cancellation for 1 s, at "
         )
     )
 
@@ -513,7 +514,7 @@ async def test_an_action_callback_that_cannot_start_is_logged(
     ]
     assert records[0].exc_info is not None
     assert isinstance(records[0].exc_info[1], TooManyActions)
-    assert SEEN == []
+    assert seen_calls == []
 
 
 @pytest.mark.asyncio

@@ -5,7 +5,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pyrobots_aio.events as events
+from pyrobots_aio import events
 
 PACKAGE = Path(events.__file__).parent
 ALLOWED = {"_core", "_exceptions", "actions", "state"}

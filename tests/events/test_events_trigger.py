@@ -38,7 +38,9 @@ class ScriptedLoop:
         heapq.heappush(self._timers, (when, next(self._order), timer))
         return timer
 
-    def call_later(self, delay: float, callback: Callable[[], None], context: object = None) -> Timer:
+    def call_later(
+        self, delay: float, callback: Callable[[], None], context: object = None
+    ) -> Timer:
         return self.call_at(self.now + delay, callback)
 
     def pending(self) -> list[float]:
@@ -100,11 +102,11 @@ def test_a_rise_in_the_cool_down_fires_at_its_end_with_the_value_that_rose() -> 
 
 
 def test_an_edge_fires_once_per_rise_and_a_rearming_edge_fires_again_while_holding() -> None:
-    loop, edge, fired = _trigger(edge=True)
+    _loop, edge, fired = _trigger(edge=True)
     for holds in (True, True, False, True):
         edge.observe(holds, holds)
     assert fired == [(0.0, True), (0.0, True)]
-    loop, rearming, again = _trigger(edge=True, rearm=True)
+    _loop, rearming, again = _trigger(edge=True, rearm=True)
     for value in (1, 2, 3):
         rearming.observe(True, value)  # each observation that holds is a new edge
     assert again == [(0.0, 1), (0.0, 2), (0.0, 3)]

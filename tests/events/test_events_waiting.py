@@ -149,7 +149,8 @@ async def test_the_monitors_listing_and_repr() -> None:
         assert repr(robot.events) == "<EventManager 0 monitors>"
         monitor = robot.whenever("bumper", becomes=True).do(print)
         assert repr(monitor) == (
-            f"<EventMonitor #{monitor.id} 'bumper becomes=True' monitoring, fired 0, callback print>"
+            f"<EventMonitor #{monitor.id} 'bumper becomes=True' monitoring, "
+            "fired 0, callback print>"
         )
         robot.every("bumper", value=True, max_firing_freq=2)
         assert len(robot.events) == 2
