@@ -287,6 +287,35 @@ async def test_close_cancels_a_running_action_callback() -> None:
 
 
 @pytest.mark.asyncio
+async def test_a_plain_function_that_starts_an_action_is_blocked_and_closed_by_its_monitor() -> (
+    None
+):
+    @action
+    async def long_walk(robot: Robot) -> None:
+        await robot.sleep(10)
+
+    log = EventLog()
+    async with Robot(instruments=[log]) as robot:
+        robot.state.button = False
+        monitor = robot.whenever("button", becomes=True).do(lambda: long_walk(robot))
+        for _ in range(3):  # the second and third presses come while the walk runs
+            robot.state.button = True
+            robot.state.button = False
+            await robot.sleep(0.3)
+        assert monitor.running
+        assert len(robot.handles()) == 1
+        await monitor.close()
+        assert robot.handles() == []
+        assert not monitor.running
+    statuses = [e.data["callback"] for e in log.of_kind(EventKind.MONITOR_FIRED)]
+    assert statuses == ["started", "dropped", "dropped"]
+    assert log.outcomes("long_walk") == ["cancelled"]
+    assert log.cancellations("long_walk")[0].data["reason"] == (
+        "monitor 'button becomes=True' closed"
+    )
+
+
+@pytest.mark.asyncio
 async def test_stop_all_monitoring_lets_running_callbacks_finish() -> None:
     finished: list[float] = []
 

@@ -141,6 +141,10 @@ class CallbackRunner:
         except Exception:
             _log.exception("%s could not start its action", self.label)
             return
+        self._keep(handle)
+
+    def _keep(self, handle: ActionHandle[Any]) -> None:
+        """Count ``handle`` as a callback in flight until the action is done."""
         self._actions.add(handle)
         handle.add_done_callback(lambda: self._action_done(handle))
 
@@ -154,6 +158,8 @@ class CallbackRunner:
         else:
             if inspect.iscoroutine(result):  # a function returning a coroutine: run it
                 self.track(result, callback=True)
+            elif isinstance(result, ActionHandle):  # ``lambda: robot.say("hi")``: keep it
+                self._keep(result)
         self._check_settled()
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
