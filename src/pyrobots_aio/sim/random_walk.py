@@ -28,7 +28,9 @@ REFLEX_PRIORITY = 10
 """The bumper reflex outranks every ordinary motion (priority 0)."""
 BACK_OFF = 0.15
 """Metres the reflex backs off after a bump."""
-DOCK_ATTEMPTS = 3
+DOCK_ATTEMPTS = 5
+DETOUR = 0.4
+"""Metres driven on, the way the reflex left the robot facing, before docking again."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,17 +103,36 @@ async def random_walk(
                 interrupted += 1
             done += 1
         docked = await _dock(robot)
+        reflex.stop_monitoring()
+        await _reflex_done(robot)  # a bump at the very end: let the reflex back off
     finally:
         await reflex.close()
     return WalkReport(done, reflex.firings, interrupted, docked, robot.time() - start)
 
 
 async def _dock(robot: SimRobot) -> bool:
+    """Dock; after a bump, go round the obstacle (bug-style) instead of retrying straight."""
     for attempt in range(1, DOCK_ATTEMPTS + 1):
         try:
             await robot.dock()
         except ActionInterrupted:
-            _log.info("docking attempt %d interrupted by a bump; trying again", attempt)
+            _log.info("docking attempt %d interrupted by a bump; detouring", attempt)
+            await _detour(robot)
         else:
             return True
     return bool(robot.state.docked)
+
+
+async def _detour(robot: SimRobot) -> None:
+    """Drive on `DETOUR` metres once the reflex has turned away (it may bump again)."""
+    try:
+        await robot.drive_distance(DETOUR)  # queued behind the reflex, which holds the wheels
+    except ActionInterrupted:
+        _log.info("detour interrupted by a bump")
+
+
+async def _reflex_done(robot: SimRobot) -> None:
+    """Wait until a bumper reflex holding the wheels is done."""
+    holder = robot.resources.owner(WHEELS)
+    if holder is not None and holder.name == bumper_reflex.name:
+        await holder.wait_done()
