@@ -51,10 +51,12 @@ async def test_cancel_grace_warns_with_location_then_abandons(
             handle = deaf(robot, release)
             await robot.sleep(0.1)
         took = asyncio.get_running_loop().time() - t0
+        (task,) = [t for t in asyncio.all_tasks() if t.get_name() == f"deaf#{handle.id}"]
     finally:
         release.set()  # let the abandoned task end, so the test leaves nothing behind
         await asyncio.sleep(0)
     assert took == pytest.approx(0.1 + 4.0)
+    await task  # it ends quietly, long after the robot stopped, its outcome untouched
     assert handle.outcome is Outcome.CANCELLED
     messages = [(r.levelno, r.getMessage()) for r in caplog.records if r.name.startswith("pyr")]
     assert messages[0][0] == logging.WARNING

@@ -359,6 +359,8 @@ async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
         handle.started_at = executive.loop.time()
         executive.started(handle)
         await _run_body(handle, coro)
+        if handle._phase == _DONE:  # abandoned by the watchdog: done and reported already
+            return
     handle._phase = _FINISHING
     try:
         if handle._children:
