@@ -510,3 +510,23 @@ async def test_compound_request_is_not_starved_by_a_stream_of_single_requests() 
         for stream in streams:
             await stream
         assert log.count("a") == log.count("b") == 50
+
+
+@pytest.mark.asyncio
+async def test_a_skipped_child_fails_its_parent_and_keeps_its_own_handle() -> None:
+    @action
+    async def tries_to_scratch(robot: Arms) -> None:
+        await scratch_head(robot)
+
+    async with Arms() as robot:
+        lift = lift_box(robot)
+        await settle()
+        parent = tries_to_scratch(robot)
+        assert await parent.wait_done() is Outcome.FAILED  # it ran, and raised
+        error = parent.exception()
+        assert isinstance(error, ActionSkipped)
+        assert error.handle is not parent
+        assert error.handle.name == "scratch_head"
+        assert error.handle.outcome is Outcome.SKIPPED
+        assert error.holder is lift
+        robot.gate.set()

@@ -374,11 +374,13 @@ async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> No
         value = await coro
     except asyncio.CancelledError:
         handle._settle(Outcome.CANCELLED, error=handle._interrupted())
-    except ActionSkipped as skipped:
-        skipped.handle = handle
-        handle._settle(Outcome.SKIPPED, error=skipped)
     except Exception as exc:
-        if handle._cancel_requested:
+        if isinstance(exc, ActionSkipped) and exc.handle is None:
+            # Its own lock request was refused. A skip that already names an action is a
+            # child's, re-raised by awaiting it: for this action, an ordinary failure.
+            exc.handle = handle
+            handle._settle(Outcome.SKIPPED, error=exc)
+        elif handle._cancel_requested:
             _log.warning(
                 "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
             )
