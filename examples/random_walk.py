@@ -10,8 +10,8 @@ Run: ``python examples/random_walk.py [--seed N] [--duration SECONDS]``
 from __future__ import annotations
 
 import argparse
-import logging
 
+from pyrobots_aio.cli import install_console_handler
 from pyrobots_aio.sim import SimRobot, run
 from pyrobots_aio.sim.random_walk import WalkReport, random_walk
 
@@ -26,7 +26,7 @@ if __name__ == "__main__":
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--duration", type=float, default=None, help="simulated seconds")
     options = parser.parse_args()
-    logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
+    install_console_handler()
     report = run(main, options.seed, options.duration)
     print(
         f"{report.moves} moves, {report.bumps} bumps handled, {report.interrupted} moves "
