@@ -78,18 +78,44 @@ class ActionInterrupted(ActionError):
 class ActionSkipped(ActionError):
     """Raised when awaiting an action that did not run because a resource was busy.
 
+    The message names the resource and what stands in the way: its holder, or
+    the earlier queued request it is promised to (a ``wait=False`` request never
+    overtakes one), or both when a ``preempt=True, wait=False`` request could
+    cancel the holder but would then still wait behind a queued request.
+
     Attributes:
         resource: The busy resource.
-        holder: The handle of the action holding it (or None).
+        holder: The handle of the action holding it, or None when it is free
+            but promised to ``queued``.
+        queued: The handle of the earlier queued request it is promised to, or
+            None when only ``holder`` is in the way.
+        queued_priority: The priority of that queued request (None without one).
         handle: The handle of the skipped action (None until attached).
     """
 
-    def __init__(self, resource: Any, holder: Any, handle: Any = None) -> None:
+    def __init__(
+        self,
+        resource: Any,
+        holder: Any,
+        handle: Any = None,
+        *,
+        queued: Any = None,
+        queued_priority: int | None = None,
+    ) -> None:
         self.resource = resource
         self.holder = holder
+        self.queued = queued
+        self.queued_priority = queued_priority
         self.handle = handle
-        owner = f"{holder.name}#{holder.id}" if holder is not None else "a queued request"
-        super().__init__(f"skipped: resource {resource.name!r} is busy (held by {owner})")
+        held = f"is busy (held by {holder.name}#{holder.id})" if holder is not None else "is busy"
+        if queued is None:
+            what = held
+        else:
+            promised = (
+                f"promised to {queued.name}#{queued.id} (queued ahead, priority {queued_priority})"
+            )
+            what = f"{held} and {promised}" if holder is not None else f"is {promised}"
+        super().__init__(f"skipped: resource {resource.name!r} {what}")
 
 
 class TooManyActions(ActionError):

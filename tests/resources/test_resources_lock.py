@@ -411,6 +411,35 @@ def test_locking_something_that_is_not_a_resource() -> None:
     )
 
 
+def test_bare_lock_without_a_resource_says_to_name_one() -> None:
+    async def drive(robot: Robot) -> None: ...
+
+    with pytest.raises(InvalidResourceError) as info:
+        lock(drive)  # type: ignore[arg-type]
+    assert str(info.value) == (
+        "lock() got the function 'drive' instead of a resource: a bare @lock names nothing "
+        "to take; write @lock(RESOURCE), e.g. @lock(Resource('wheels'))"
+    )
+    with pytest.raises(InvalidResourceError) as info:
+        lock(lift_box)  # type: ignore[arg-type]
+    assert str(info.value).startswith("lock() got the function 'lift_box' instead of a resource")
+
+
+def test_plain_with_says_to_use_async_with() -> None:
+    wheels = lock(WHEELS)
+    expected = (
+        "'with lock(Resource('wheels'), wait=True, priority=0, preempt=False)' cannot wait for "
+        "the resource without blocking the loop; write 'async with lock(Resource('wheels'), "
+        "wait=True, priority=0, preempt=False):' inside an @action body"
+    )
+    with pytest.raises(LockUsageError) as info, wheels:
+        pass
+    assert str(info.value) == expected
+    with pytest.raises(LockUsageError) as info:
+        wheels.__exit__(None, None, None)
+    assert str(info.value) == expected
+
+
 def test_invalid_options() -> None:
     with pytest.raises(LockUsageError) as info:
         lock(WHEELS, priority="high")  # type: ignore[arg-type]

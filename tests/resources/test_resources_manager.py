@@ -137,8 +137,12 @@ async def test_compound_request_is_not_starved_by_single_requests() -> None:
     assert manager.waiters(Y) == [compound, *singles]
     with pytest.raises(ActionSkipped) as info:
         await manager.acquire(Owner("impatient"), Y, wait=False)
-    assert str(info.value) == "skipped: resource 'y' is busy (held by a queued request)"
+    assert str(info.value) == (
+        f"skipped: resource 'y' is promised to compound#{compound.id} (queued ahead, priority 0)"
+    )
     assert info.value.holder is None
+    assert info.value.queued is compound
+    assert info.value.queued_priority == 0
     x_grant.release()
     await settle()
     assert manager.owner(XY) is compound
@@ -281,7 +285,8 @@ async def test_child_is_served_once_its_parent_blocks_the_request_ahead() -> Non
 
 
 @pytest.mark.asyncio
-async def test_preemption_cancels_lower_priority_holders_and_waits_first_in_line() -> None:
+async def test_preemption_cancels_lower_priority_holders_but_never_overtakes_a_peer() -> None:
+    """DESIGN §4: nobody overtakes an earlier queued request of equal or higher priority."""
     manager = Manager()
     driver = Owner("drive")
     grant = await manager.acquire(driver, W, priority=0)
@@ -293,12 +298,50 @@ async def test_preemption_cancels_lower_priority_holders_and_waits_first_in_line
     await settle()
     assert driver.reasons == [f"preempted by bumper_reflex#{reflex.id} (priority 10) for 'w'"]
     assert manager.owner(W) is driver  # until its cleanup is over
-    assert manager.waiters(W) == [reflex, queued]
+    assert manager.waiters(W) == [queued, reflex]
     grant.release()
+    await settle()
+    assert manager.owner(W) is queued
+    (await queued_task).release()
     await settle()
     assert manager.owner(W) is reflex
     (await reflex_task).release()
-    (await queued_task).release()
+    assert_idle(manager)
+
+
+@pytest.mark.asyncio
+async def test_preempting_request_that_will_not_wait_cancels_nobody_behind_a_peer() -> None:
+    """Cancelling the holder would only serve the earlier peer: skipped, naming both."""
+    recorder = Recorder()
+    instruments = Instruments()
+    instruments.add(recorder)
+    manager = Manager(instruments, clock=lambda: 0.0)
+    low, patient = Owner("low"), Owner("patient")
+    grant = await manager.acquire(low, W, priority=0)
+    patient_task = start(manager, patient, W, priority=5)
+    await settle()
+    reflex_task = start(manager, Owner("reflex"), W, priority=5, preempt=True, wait=False)
+    await settle()
+    assert low.reasons == []
+    with pytest.raises(ActionSkipped) as info:
+        reflex_task.result()  # done at once, never waiting
+    assert str(info.value) == (
+        f"skipped: resource 'w' is busy (held by low#{low.id}) and promised to "
+        f"patient#{patient.id} (queued ahead, priority 5)"
+    )
+    assert (info.value.holder, info.value.queued, info.value.queued_priority) == (low, patient, 5)
+    skip = recorder.events[-1]
+    assert (skip.kind, skip.name) == (EventKind.RESOURCE_SKIPPED, "reflex")
+    assert dict(skip.data) == {
+        "resources": ["w"],
+        "leaves": ["w"],
+        "priority": 5,
+        "busy": "w",
+        "holder": low.id,
+        "queued": patient.id,
+    }
+    grant.release()
+    (await patient_task).release()
     assert_idle(manager)
 
 
@@ -470,7 +513,7 @@ async def test_every_arbitration_step_is_instrumented() -> None:
     common = {"resources": ["xy"], "leaves": ["x", "y"], "priority": 0}
     mine = {"resources": ["x"], "leaves": ["x"]}
     reason = f"preempted by reflex#{reflex.id} (priority 3) for 'x'"
-    skipped = {**mine, "busy": "x", "holder": low.id, "priority": 0}
+    skipped = {**mine, "busy": "x", "holder": low.id, "queued": None, "priority": 0}
     preempted = {**common, "resource": "x", "by": reflex.id, "reason": reason}
     assert got == [
         (EventKind.RESOURCE_ACQUIRED, 0.0, "low", common),

@@ -170,7 +170,8 @@ async def test_equal_priority_holder_is_not_preempted() -> None:
 
 
 @pytest.mark.asyncio
-async def test_preempting_request_goes_before_earlier_waiters_of_its_priority() -> None:
+async def test_preempting_request_queues_behind_earlier_waiters_of_its_priority() -> None:
+    """DESIGN §4: the reflex still preempts the wanderer, but never overtakes a peer."""
     gate = asyncio.Event()
     async with Create3() as robot:
         walk = wander(robot)
@@ -179,8 +180,46 @@ async def test_preempting_request_goes_before_earlier_waiters_of_its_priority() 
         await asyncio.sleep(0)
         reflex = bumper_reflex(robot)
         await asyncio.sleep(0)
-        assert robot.resources.waiters(WHEELS) == [reflex, patient]
-        await reflex
+        assert robot.resources.waiters(WHEELS) == [patient, reflex]
+        await walk.wait_done()
         assert walk.cancelled()
+        await asyncio.sleep(0)
+        assert robot.resources.owner(WHEELS) is patient
+        assert reflex.state is ActionState.WAITING
         gate.set()
         await patient
+        assert await reflex == "backed off"
+        assert robot.log[-1] == "reflex backs off (holds wheels)"
+
+
+@pytest.mark.asyncio
+async def test_preempting_without_waiting_takes_over_after_the_cleanup() -> None:
+    async with Create3() as robot:
+        walk = wander(robot)
+        await asyncio.sleep(0)
+        reflex = reflex_or_nothing(robot)
+        assert await reflex.wait_done() is Outcome.SUCCEEDED
+        assert walk.outcome is Outcome.CANCELLED
+        assert robot.log == [
+            "wander (holds wheels)",
+            "wander stopping (holds wheels)",
+            "wander stopped (holds wheels)",
+            "reflex (holds wheels)",
+        ]
+
+
+@pytest.mark.asyncio
+async def test_preempting_without_waiting_is_skipped_by_an_equal_priority_holder() -> None:
+    gate = asyncio.Event()
+    async with Create3() as robot:
+        busy = important(robot, gate)
+        await asyncio.sleep(0)
+        reflex = reflex_or_nothing(robot)
+        assert await reflex.wait_done() is Outcome.SKIPPED
+        error = reflex.exception()
+        assert isinstance(error, ActionSkipped)
+        assert str(error) == f"skipped: resource 'wheels' is busy (held by important#{busy.id})"
+        assert busy.state is ActionState.RUNNING
+        gate.set()
+        await busy
+        assert robot.log == []

@@ -68,6 +68,23 @@ def test_compound_named_like_one_of_its_leaves_is_rejected() -> None:
         CompoundResource(L_ARM, HEAD, name="head")
 
 
+def test_compound_named_like_a_plain_part_reports_a_name_clash() -> None:
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(Resource("arms"), R_ARM, name="arms")
+    assert str(info.value) == (
+        "compound resource 'arms' has the name of its part Resource('arms') ('arms' > 'arms'); "
+        "resources compare by name, so the two would clash: rename one of them"
+    )
+    upper = CompoundResource(ARMS, HEAD, name="upper")
+    with pytest.raises(InvalidResourceError) as info:
+        CompoundResource(upper, name="head")
+    assert str(info.value) == (
+        "compound resource 'head' has the name of its part Resource('head') "
+        "('head' > 'upper' > 'head'); resources compare by name, so the two would clash: "
+        "rename one of them"
+    )
+
+
 def test_compound_of_non_resources_is_rejected_naming_the_value() -> None:
     with pytest.raises(InvalidResourceError) as info:
         CompoundResource(L_ARM, "r_arm")  # type: ignore[arg-type]

@@ -6,17 +6,21 @@ action. As a decorator, the resources are held until the action is *done*
 (its cleanup and children included): they are released by a finalizer of its
 handle, so a preempting action gets them only once the preempted one has
 stopped driving them. Stacked ``@lock`` decorators make one atomic request.
+
+A ``@lock`` wrapper is the action's body when the action's function is it, or
+wraps it through ``__wrapped__`` (decorators that use `functools.wraps`, so
+``@action @my_decorator @lock(R)`` still holds until the action is done);
+anything else awaiting it is a locked helper, holding for the call only.
 """
 
 from __future__ import annotations
 
 import functools
 import inspect
-import sys
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar, overload
+from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar, overload
 
-from .._exceptions import LockUsageError
+from .._exceptions import InvalidResourceError, LockUsageError
 from ..resources import ResourceManager
 from ..resources._grant import check_options
 from ..resources._resource import check_resource
@@ -103,6 +107,19 @@ class Lock:
 
     # -- as a context manager ---------------------------------------------
 
+    def __enter__(self) -> NoReturn:
+        self._not_sync()
+
+    def __exit__(self, *exc_info: object) -> NoReturn:
+        self._not_sync()
+
+    def _not_sync(self) -> NoReturn:
+        msg = (
+            f"'with {self!r}' cannot wait for the resource without blocking the loop; "
+            f"write 'async with {self!r}:' inside an @action body"
+        )
+        raise LockUsageError(msg)
+
     async def __aenter__(self) -> Grant[ActionHandle[Any]]:
         handle = current_action.get()
         if handle is None:
@@ -153,12 +170,24 @@ def lock(
             outcome is ``SKIPPED`` and awaiting it raises `ActionSkipped`.
         priority: Waiters are served by priority (higher first), then in order.
         preempt: If every action in the way has a lower priority, cancel them
-            and take the resource once their cleanup is done (waiting for
-            that even if ``wait`` is False).
+            and take the resource once their cleanup is done, after any earlier
+            queued request of equal or higher priority. With ``wait=False`` it
+            still waits for that cleanup, but is skipped without cancelling
+            anyone if an earlier queued request would be served first.
+
+    Note:
+        A decorator between ``@action`` and ``@lock`` must keep ``__wrapped__``
+        (use `functools.wraps`); otherwise the lock cannot tell it is the
+        action's body and holds for the call only, as for a locked helper,
+        not until the action and its children are done. A holder that is
+        already being cancelled keeps its first cancel reason when it is
+        preempted (``ActionInterrupted.reason``); the ``resource.preempted``
+        event still records the preemption.
 
     Raises:
-        InvalidResourceError: ``resource`` is not a resource.
-        LockUsageError: Bad options; used outside an action.
+        InvalidResourceError: ``resource`` is not a resource (a bare ``@lock``
+            without ``(RESOURCE)`` included).
+        LockUsageError: Bad options; used outside an action; a plain ``with``.
 
     Example:
         >>> from pyrobots_aio import Robot, action
@@ -174,7 +203,19 @@ def lock(
         ...     async with lock(Resource("l_arm"), wait=False):
         ...         await robot.sleep(1)
     """
+    _refuse_bare(resource)
     return Lock(resource, wait, priority, preempt)
+
+
+def _refuse_bare(resource: object) -> None:
+    """Raise if ``lock`` got a function: a bare ``@lock`` with nothing to take."""
+    if callable(resource):  # resources are not callable
+        name = getattr(resource, "__name__", repr(resource))
+        msg = (
+            f"lock() got the function {name!r} instead of a resource: a bare @lock names "
+            "nothing to take; write @lock(RESOURCE), e.g. @lock(Resource('wheels'))"
+        )
+        raise InvalidResourceError(msg)
 
 
 def _manager_of(robot: object, what: str) -> ResourceManager[ActionHandle[Any]]:
@@ -205,8 +246,7 @@ def _wrap(locked: _Locked) -> Callable[..., Coroutine[Any, Any, Any]]:
         grant = await manager.acquire(
             handle, *resources, wait=wait, priority=priority, preempt=preempt
         )
-        if getattr(handle._coro, "cr_frame", None) is sys._getframe():
-            # This call is the action's body: hold until the action is done.
+        if _is_body(handle._fn, take_then_run):  # hold until the action is done
             handle.add_finalizer(grant.release)
             return await fn(*args, **kwargs)
         try:  # a locked helper awaited inside some action: hold for the call
@@ -216,3 +256,8 @@ def _wrap(locked: _Locked) -> Callable[..., Coroutine[Any, Any, Any]]:
 
     setattr(take_then_run, _MARK, locked)
     return take_then_run
+
+
+def _is_body(fn: Callable[..., object] | None, wrapper: Callable[..., object]) -> bool:
+    """Whether ``wrapper`` is the action function ``fn``, or wrapped by it (``__wrapped__``)."""
+    return fn is not None and inspect.unwrap(fn, stop=lambda f: f is wrapper) is wrapper

@@ -126,7 +126,7 @@ class Grant(Generic[OwnerT]):
         self.names = tuple(dict.fromkeys(r.name for r in resources))
         self.leaves = leaves
         self.wait, self.priority, self.preempt = options
-        self.key = (-self.priority, 1, seq)
+        self.key = (-self.priority, seq)
 
     @property
     def waiting(self) -> bool:

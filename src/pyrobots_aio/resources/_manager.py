@@ -16,7 +16,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import logging
-from typing import TYPE_CHECKING, Generic
+from typing import TYPE_CHECKING, Generic, NoReturn
 
 from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._exceptions import ActionSkipped, LockUsageError
@@ -108,14 +108,16 @@ class ResourceManager(Generic[OwnerT]):
             wait: If False, raise `ActionSkipped` instead of waiting.
             priority: Higher priorities are served first.
             preempt: Cancel the holders in the way if all have a lower priority,
-                then wait, first in line, until they are done.
+                then wait until they are done, behind any earlier queued request
+                of equal or higher priority (with ``wait`` False: only if there
+                is none, else skip without cancelling anyone).
 
         Returns:
             The `Grant`, held; call its ``release()`` when done.
 
         Raises:
             ActionSkipped: ``wait`` is False and a resource is busy (or promised
-                to an earlier request).
+                to an earlier request); it names the holder or that request.
             InvalidResourceError: Something given is not a resource.
             LockUsageError: Bad options, no resources, or ``owner`` is done.
         """
@@ -126,7 +128,7 @@ class ResourceManager(Generic[OwnerT]):
         preempting = preempt and self._preempt(grant)
         if not wait and not preempting:
             self._skip(grant)
-        return await self._wait(grant, preempting=preempting)
+        return await self._wait(grant)
 
     def release(self, grant: Grant[OwnerT]) -> None:
         """Release ``grant`` and serve whoever can now proceed (idempotent)."""
@@ -218,9 +220,7 @@ class ResourceManager(Generic[OwnerT]):
             owner.add_done_callback(functools.partial(self._owner_done, owner))
         return record
 
-    async def _wait(self, grant: Grant[OwnerT], *, preempting: bool) -> Grant[OwnerT]:
-        if preempting:  # first in line among its priority
-            grant.key = (grant.key[0], 0, grant.key[2])
+    async def _wait(self, grant: Grant[OwnerT]) -> Grant[OwnerT]:
         grant._state = WAITING
         owner = grant.owner
         record = self._record(owner)
@@ -344,10 +344,19 @@ class ResourceManager(Generic[OwnerT]):
                 return
 
     def _preempt(self, grant: Grant[OwnerT]) -> bool:
-        """Cancel the holders in ``grant``'s way if all have a lower priority."""
+        """Cancel the holders in ``grant``'s way if all have a lower priority.
+
+        A request that will not wait cancels nobody when a request queued ahead
+        would be served before it: it is skipped, naming both.
+        """
         blockers = _rules.blockers(grant)
         if not blockers or any(hold.priority >= grant.priority for hold, _ in blockers):
             return False
+        if not grant.wait:
+            ahead = _rules.queued_ahead(grant)
+            if ahead is not None:
+                leaf, other = ahead
+                self._skip(grant, (leaf.resource, _rules.holder_in_way(grant, leaf), other))
         owner, done = grant.owner, set[Owner]()
         for hold, leaf in blockers:
             if hold.owner in done:
@@ -361,12 +370,18 @@ class ResourceManager(Generic[OwnerT]):
             hold.owner.cancel(reason)
         return True
 
-    def _skip(self, grant: Grant[OwnerT]) -> None:
-        resource, holder = _rules.obstacle(grant, self._below)
+    def _skip(self, grant: Grant[OwnerT], why: _rules.Obstacle[OwnerT] | None = None) -> NoReturn:
+        resource, holder, ahead = why if why is not None else _rules.obstacle(grant, self._below)
+        queued = ahead.owner if ahead is not None else None
         if self._instruments:
-            holder_id = holder.id if holder is not None else None
-            self._emit(EventKind.RESOURCE_SKIPPED, grant, busy=resource.name, holder=holder_id)
-        raise ActionSkipped(resource, holder)
+            data = {
+                "busy": resource.name,
+                "holder": holder.id if holder is not None else None,
+                "queued": queued.id if queued is not None else None,
+            }
+            self._emit(EventKind.RESOURCE_SKIPPED, grant, **data)
+        priority = ahead.priority if ahead is not None else None
+        raise ActionSkipped(resource, holder, queued=queued, queued_priority=priority)
 
     # -- bookkeeping ------------------------------------------------------
 

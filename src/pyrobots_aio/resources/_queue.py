@@ -1,10 +1,11 @@
 """The waiting line of one plain resource: requests in service order.
 
-Service order is priority first (higher first), then requests that preempted
-before the others of their priority, then first come first served. Requests
-of one priority band sit in a deque in arrival order; a request that stops
-waiting (granted or withdrawn) is dropped lazily when it reaches the front,
-and a band is compacted when dead entries outnumber live ones, so every
+Service order is priority first (higher first), then first come first served;
+a preempting request gets no place ahead of earlier requests of its priority
+(DESIGN §4: nobody overtakes an earlier request of equal or higher priority).
+Requests of one priority band sit in a deque in arrival order; a request that
+stops waiting (granted or withdrawn) is dropped lazily when it reaches the
+front, and a band is compacted when dead entries outnumber live ones, so every
 operation is O(1) amortized apart from creating a new band (O(bands)).
 """
 
@@ -22,8 +23,8 @@ class Queued(Protocol):
     """What the queue needs of a request."""
 
     @property
-    def key(self) -> tuple[int, int, int]:
-        """Sort key: ``(-priority, 0 if it preempted else 1, arrival number)``."""
+    def key(self) -> tuple[int, int]:
+        """Sort key: ``(-priority, arrival number)``."""
 
     @property
     def waiting(self) -> bool:
@@ -47,12 +48,12 @@ class WaitQueue(Generic[Q]):
     __slots__ = ("_bands", "_order")
 
     def __init__(self) -> None:
-        self._bands: dict[tuple[int, int], _Band[Q]] = {}
-        self._order: list[tuple[int, int]] = []
+        self._bands: dict[int, _Band[Q]] = {}
+        self._order: list[int] = []
 
     def add(self, request: Q) -> None:
         """Queue ``request`` (it must be waiting) behind the others of its band."""
-        band_key = request.key[:2]
+        band_key = request.key[0]
         band = self._bands.get(band_key)
         if band is None:
             band = _Band()
@@ -63,7 +64,7 @@ class WaitQueue(Generic[Q]):
 
     def discard(self, request: Q) -> None:
         """Forget ``request``, which has just stopped waiting."""
-        band_key = request.key[:2]
+        band_key = request.key[0]
         band = self._bands[band_key]
         band.live -= 1
         if band.live == 0:

@@ -56,8 +56,9 @@ class CompoundResource:
         name: Its name; by default the parts' names joined with ``+``.
 
     Raises:
-        InvalidResourceError: A part is not a resource, there are no parts, or
-            the compound contains itself (a part, at any depth, has its name).
+        InvalidResourceError: A part is not a resource, there are no parts, the
+            compound contains itself (a compound part, at any depth, has its
+            name), or a plain part, at any depth, has its name (a name clash).
 
     Example:
         >>> L_ARM, R_ARM = Resource("l_arm"), Resource("r_arm")
@@ -117,7 +118,13 @@ def _reject_self(name: str, parts: tuple[AnyResource, ...]) -> None:
         here = (*path, node.name)
         if node.name == name:
             trail = " > ".join(repr(step) for step in here)
-            msg = f"compound resource {name!r} contains itself: {trail}; rename one of them"
+            if isinstance(node, Resource):
+                msg = (
+                    f"compound resource {name!r} has the name of its part {node!r} ({trail}); "
+                    "resources compare by name, so the two would clash: rename one of them"
+                )
+            else:
+                msg = f"compound resource {name!r} contains itself: {trail}; rename one of them"
             raise InvalidResourceError(msg)
         if isinstance(node, CompoundResource):
             stack.extend((part, here) for part in node.parts)

@@ -20,7 +20,7 @@ number of queued requests of it and its descendants.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeAlias
 
 from ._grant import Grant, Leaf, Owner, OwnerT, descends
 
@@ -29,31 +29,47 @@ if TYPE_CHECKING:
 
     from ._resource import Resource
 
+Obstacle: TypeAlias = "tuple[Resource, OwnerT | None, Grant[OwnerT] | None]"
+"""What stops a request: a resource, its holder in the way, the request queued ahead."""
+
 
 def grantable(grant: Grant[OwnerT], below: Mapping[Owner, int]) -> bool:
     """Whether ``grant`` may be served now."""
-    owner = grant.owner
     for leaf in grant.leaves:
-        holds = leaf.holds
-        if holds and not descends(owner, holds[-1].owner):
+        if holder_in_way(grant, leaf) is not None:
             return False
     return all(clear_ahead(grant, leaf, below) for leaf in grant.leaves if leaf.queue)
 
 
 def clear_ahead(grant: Grant[OwnerT], leaf: Leaf[OwnerT], below: Mapping[Owner, int]) -> bool:
     """Whether no request ahead of ``grant`` in ``leaf``'s line must be served first."""
+    return first_ahead(grant, leaf, below) is None
+
+
+def first_ahead(
+    grant: Grant[OwnerT], leaf: Leaf[OwnerT], below: Mapping[Owner, int]
+) -> Grant[OwnerT] | None:
+    """The request ahead of ``grant`` in ``leaf``'s line that must be served first, or None.
+
+    Only for a leaf that is free to ``grant``'s owner (nobody else holds it).
+    """
     holds = leaf.holds
     if holds:  # inherited: everyone else in line is blocked by the lineage, bar its descendants
         others = below.get(holds[-1].owner, 0) - grant.waiting
         if others <= 0:
-            return True
+            return None
+    return _yields_to(grant, leaf)
+
+
+def _yields_to(grant: Grant[OwnerT], leaf: Leaf[OwnerT]) -> Grant[OwnerT] | None:
+    """The first request ahead of ``grant`` in ``leaf``'s line that it must let go first."""
     owner, key = grant.owner, grant.key
     for other in leaf.queue:
         if other is grant or other.key > key:
-            return True
+            return None
         if not exempt(owner, other):
-            return False
-    return True
+            return other
+    return None
 
 
 def exempt(owner: Owner, other: Grant[OwnerT]) -> bool:
@@ -89,16 +105,42 @@ def blockers(grant: Grant[OwnerT]) -> list[tuple[Grant[OwnerT], Leaf[OwnerT]]]:
     ]
 
 
-def obstacle(grant: Grant[OwnerT], below: Mapping[Owner, int]) -> tuple[Resource, OwnerT | None]:
-    """The first busy leaf of a request that cannot be served, and its holder.
+def queued_ahead(grant: Grant[OwnerT]) -> tuple[Leaf[OwnerT], Grant[OwnerT]] | None:
+    """A request queued ahead of ``grant`` that it must let go first, whoever holds now.
 
-    The holder is None when the leaf is free but promised to a request ahead.
+    A request that preempts without waiting asks this before cancelling anyone:
+    once the holders are gone, such a request would be served first.
     """
-    owner = grant.owner
     for leaf in grant.leaves:
-        if leaf.holds and not descends(owner, leaf.holds[-1].owner):
-            return leaf.resource, leaf.holds[-1].owner
+        if leaf.queue:
+            other = _yields_to(grant, leaf)
+            if other is not None:
+                return leaf, other
+    return None
+
+
+def holder_in_way(grant: Grant[OwnerT], leaf: Leaf[OwnerT]) -> OwnerT | None:
+    """The innermost holder of ``leaf`` if it is not ``grant``'s owner or an ancestor, else None."""
+    holds = leaf.holds
+    if holds and not descends(grant.owner, holds[-1].owner):
+        return holds[-1].owner
+    return None
+
+
+def obstacle(grant: Grant[OwnerT], below: Mapping[Owner, int]) -> Obstacle[OwnerT]:
+    """What stops a request that cannot be served: a leaf, its holder, the request ahead.
+
+    The first busy leaf and its holder (no request ahead reported); else the
+    first leaf that is free but promised to a request ahead, with that request
+    (the holder is then None).
+    """
     for leaf in grant.leaves:
-        if leaf.queue and not clear_ahead(grant, leaf, below):
-            return leaf.resource, None
-    return grant.leaves[0].resource, None
+        holder = holder_in_way(grant, leaf)
+        if holder is not None:
+            return leaf.resource, holder, None
+    for leaf in grant.leaves:
+        if leaf.queue:
+            other = first_ahead(grant, leaf, below)
+            if other is not None:
+                return leaf.resource, None, other
+    return grant.leaves[0].resource, None, None
