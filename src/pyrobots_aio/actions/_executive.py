@@ -41,12 +41,7 @@ class Executive:
         cancel_grace: float = 2.0,
         instruments: Instruments | None = None,
     ) -> None:
-        if max_actions is not None and max_actions < 1:
-            msg = f"max_actions must be a positive integer or None, got {max_actions!r}"
-            raise ValueError(msg)
-        if not cancel_grace > 0:
-            msg = f"cancel_grace must be a positive number of seconds, got {cancel_grace!r}"
-            raise ValueError(msg)
+        _check_options(max_actions, cancel_grace)
         self.owner = owner
         self.max_actions = max_actions
         self.cancel_grace = float(cancel_grace)
@@ -57,6 +52,7 @@ class Executive:
         self._next_id = 1
         self._watch: deque[tuple[float, int, ActionHandle[Any]]] = deque()
         self._watch_timer: asyncio.TimerHandle | None = None
+        self._closing = False
 
     # -- lifecycle --------------------------------------------------------
 
@@ -78,7 +74,12 @@ class Executive:
         self._loop = loop
 
     async def close(self, reason: str) -> None:
-        """Cancel every action and wait, bounded by two graces, even if cancelled meanwhile."""
+        """Cancel every action and wait, bounded by two graces, even if cancelled meanwhile.
+
+        From here on no new root action starts (`spawn` says the robot is shutting
+        down); children, such as those a cleanup starts, still do.
+        """
+        self._closing = True
         roots = list(self._roots)
         for handle in roots:
             handle.cancel(reason)
@@ -94,6 +95,7 @@ class Executive:
             self._watch_timer = None
         self._watch.clear()
         self._loop = None
+        self._closing = False
         if interrupted is not None:
             raise interrupted
 
@@ -119,6 +121,12 @@ class Executive:
         parent = current_action.get()
         if parent is not None and (parent._executive is not self or parent.done()):
             parent = None
+        if parent is None and self._closing:
+            msg = (
+                f"cannot start action {name!r}: {self.owner!r} is shutting down; start it "
+                "before leaving 'async with robot:', or from an action's cleanup"
+            )
+            raise RobotNotRunningError(msg)
         ident = self._next_id
         self._next_id = ident + 1
         handle: ActionHandle[T] = ActionHandle(self, ident, name, parent, loop.time())
@@ -299,3 +307,19 @@ class Executive:
 
     def _emit(self, kind: EventKind, handle: ActionHandle[Any], **data: object) -> None:
         self.instruments.emit(ExecEvent(kind, self.loop.time(), handle.id, handle.name, data))
+
+
+def _check_options(max_actions: object, cancel_grace: object) -> None:
+    """Raise ValueError, naming the value and the fix, for bad executive options."""
+    if max_actions is not None and (
+        isinstance(max_actions, bool) or not isinstance(max_actions, int) or max_actions < 1
+    ):
+        msg = f"max_actions must be a positive integer or None, got {max_actions!r}"
+        raise ValueError(msg)
+    if (
+        isinstance(cancel_grace, bool)
+        or not isinstance(cancel_grace, int | float)
+        or not 0 < cancel_grace < float("inf")
+    ):
+        msg = f"cancel_grace must be a positive number of seconds, got {cancel_grace!r}"
+        raise ValueError(msg)

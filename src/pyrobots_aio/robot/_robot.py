@@ -106,6 +106,13 @@ class Robot(StateMethods):
         if hasattr(type(self), act.name) or act.name in vars(self):
             msg = f"cannot attach action {act.name!r}: {type(self).__name__} already has that name"
             raise ActionDefinitionError(msg)
+        known = self._attached.get(act.name)
+        if known is not None and known is not act:
+            msg = (
+                f"cannot attach action {act.name!r} from {act.fn.__module__}: an action of "
+                f"that name from {known.fn.__module__} is attached already; rename one of them"
+            )
+            raise ActionDefinitionError(msg)
         self._attached[act.name] = act
 
     def __getattr__(self, name: str) -> BoundAction[..., Any]:
@@ -137,9 +144,13 @@ class Robot(StateMethods):
         return self
 
     async def __aexit__(self, *exc_info: object) -> None:
+        # Each stage runs even if the one before was cancelled (it finishes its bounded
+        # wait, then re-raises): monitors, then actions, then the backend.
         try:
-            await self._stop_monitoring()
-            await self._executive.close(SHUTDOWN_REASON)
+            try:
+                await self._stop_monitoring()
+            finally:
+                await self._executive.close(SHUTDOWN_REASON)
         finally:
             await self._stop()
 
