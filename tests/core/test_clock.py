@@ -322,6 +322,40 @@ def test_is_virtual_tells_loops_apart() -> None:
         is_virtual()
 
 
+def test_pending_timers_lists_live_timers_earliest_first() -> None:
+    async def main() -> list[list[float]]:
+        loop = asyncio.get_running_loop()
+        assert isinstance(loop, VirtualTimeLoop)
+        seen = [[timer.when() for timer in loop.pending_timers()]]
+        late = loop.call_later(5.0, lambda: None)
+        loop.call_at(2.0, lambda: None)
+        loop.call_later(1.0, lambda: None).cancel()  # cancelled: left out
+        seen.append([timer.when() for timer in loop.pending_timers()])
+        await asyncio.sleep(3.0)  # the timer due at 2.0 has fired
+        seen.append([timer.when() for timer in loop.pending_timers()])
+        late.cancel()
+        seen.append([timer.when() for timer in loop.pending_timers()])
+        return seen
+
+    assert run(main) == [[], [2.0, 5.0], [5.0], []]
+
+
+def test_ready_callbacks_lists_what_runs_at_the_next_iteration() -> None:
+    async def main() -> tuple[list[asyncio.Handle], list[list[asyncio.Handle]]]:
+        loop = asyncio.get_running_loop()
+        assert isinstance(loop, VirtualTimeLoop)
+        seen = [loop.ready_callbacks()]
+        queued = [loop.call_soon(lambda: None), loop.call_soon(lambda: None)]
+        loop.call_soon(lambda: None).cancel()  # cancelled: left out
+        seen.append(loop.ready_callbacks())
+        await asyncio.sleep(0)  # they have run
+        seen.append(loop.ready_callbacks())
+        return queued, seen
+
+    queued, seen = run(main)
+    assert seen == [[], queued, []]
+
+
 def test_the_policy_creates_virtual_loops() -> None:
     loop = VirtualTimePolicy().new_event_loop()
     try:

@@ -100,6 +100,28 @@ async def test_a_numeric_condition_on_a_key_that_holds_no_number() -> None:
 
 
 @pytest.mark.asyncio
+async def test_a_numeric_condition_on_a_flag() -> None:
+    async with Robot() as robot:
+        robot.state.update(SENSORS, docked=True)
+        assert _refused(robot, "bumper", above=0.5) == (
+            "above= compares numbers, but state key 'bumper' holds False (bool); "
+            "watch a flag with value= or becomes=, e.g. becomes=True"
+        )
+        assert _refused(robot, "docked", decrease=0.5, held_for=1.0) == (
+            "decrease= compares numbers, but state key 'docked' holds True (bool); "
+            "watch a flag with value= or becomes=, e.g. becomes=False"
+        )
+        with pytest.raises(InvalidConditionError) as error:
+            robot.on("bumper_left", increase=1)
+        assert str(error.value).startswith("increase= compares numbers, but state key")
+        with pytest.raises(InvalidConditionError) as error:
+            await robot.wait("bumper_right", below=0.5)
+        assert str(error.value).startswith("below= compares numbers, but state key")
+        assert robot.events.monitors() == []
+        robot.whenever("ir_left", above=0.5)  # numbers are still welcome
+
+
+@pytest.mark.asyncio
 async def test_an_unknown_condition_suggests_the_closest() -> None:
     async with Robot() as robot:
         robot.state.update(SENSORS)

@@ -167,16 +167,26 @@ async def test_a_predicate_with_held_for() -> None:
 
 @pytest.mark.asyncio
 async def test_a_sync_predicate_failing_at_creation_raises_there() -> None:
+    evaluations = 0
+
+    def too_close(robot: Robot) -> bool:
+        nonlocal evaluations
+        evaluations += 1
+        return bool(min(robot.state.ir_left, robot.state.ir_center) < 0.2)  # ir_left is read
+
     async with Robot() as robot:
         robot.state.update(ir_left=1.0, ir_right=1.0)
         with pytest.raises(UnknownStateKeyError) as error:
-            robot.whenever(lambda r: r.state.ir_center < 0.2)
+            robot.whenever(too_close)
         assert str(error.value) == (
             "unknown state key 'ir_center'; closest: ['ir_left']; "
             "known keys: ['ir_left', 'ir_right']"
         )
         assert robot.events.monitors() == []
-        robot.state.ir_left = 0.1  # nothing watches any more
+        assert evaluations == 1
+        robot.state.ir_left = 0.1  # the key it read: nothing watches it any more
+        await robot.sleep(1)
+        assert evaluations == 1
 
 
 @pytest.mark.asyncio
@@ -208,7 +218,9 @@ async def test_an_async_predicate_failing_is_logged(caplog: pytest.LogCaptureFix
         assert monitor.firings == 0
     records = [r for r in caplog.records if r.name == "pyrobots_aio.events"]
     assert [r.getMessage() for r in records] == [
-        "broken: the predicate failed (logged once until it succeeds again)"
+        "broken: the predicate failed (logged once until it succeeds again)",
+        "broken: the predicate read no state key and has no poll=; it will not be "
+        "evaluated again (read robot.state, or give poll=SECONDS)",
     ]
 
 
@@ -226,6 +238,55 @@ async def test_a_predicate_that_reads_no_key_and_has_no_poll_is_warned_about(
             "evaluated again (read robot.state, or give poll=SECONDS)",
         )
     ]
+
+
+async def planner_says_go(robot: Robot) -> bool:
+    await robot.sleep(0.5)  # asks a planner; reads no state key
+    return False
+
+
+@pytest.mark.asyncio
+async def test_an_async_predicate_that_reads_no_key_and_has_no_poll_is_warned_about(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    def logged() -> list[tuple[int, str]]:
+        return [
+            (r.levelno, r.getMessage()) for r in caplog.records if r.name == "pyrobots_aio.events"
+        ]
+
+    async with Robot() as robot:
+        robot.whenever(planner_says_go)
+        await robot.sleep(0.4)
+        assert logged() == []  # its first evaluation has not ended
+        await robot.sleep(0.2)
+        assert logged() == [
+            (
+                logging.WARNING,
+                "planner_says_go: the predicate read no state key and has no poll=; it will not "
+                "be evaluated again (read robot.state, or give poll=SECONDS)",
+            )
+        ]
+
+
+@pytest.mark.asyncio
+async def test_an_async_predicate_that_reads_a_key_polls_or_is_done_is_not_warned_about(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    async def low_battery(robot: Robot) -> bool:
+        await robot.sleep(0.5)
+        return bool(robot.state.battery < 0.2)
+
+    async def planner_ready(robot: Robot) -> bool:
+        await robot.sleep(0.5)
+        return True
+
+    async with Robot() as robot:
+        robot.state.battery = 1.0
+        robot.whenever(low_battery)
+        robot.whenever(planner_says_go, poll=1.0)
+        assert await robot.wait(planner_ready) is True  # a one-shot done at once
+        await robot.sleep(2.0)
+    assert [r for r in caplog.records if r.name == "pyrobots_aio.events"] == []
 
 
 @pytest.mark.asyncio

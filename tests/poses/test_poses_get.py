@@ -122,6 +122,12 @@ def test_unknown_frames_are_listed_for_every_format() -> None:
         (None, "a NoneType is not a pose"),
         (b"xyz", "a bytes is not a pose"),
         ({1.0, 2.0, 3.0}, "a set is not a pose"),
+        # Not matrices: only 4 rows, or rows of 4, are read as a matrix.
+        ((1, 2, 3, b"map"), "a sequence of 4 items is not a pose"),
+        ([[1, 2, 3], "map"], "a sequence of 2 items is not a pose"),
+        ([np.zeros(3), "map"], "a sequence of 2 items is not a pose"),
+        (((1.0, 2.0, 3.0), (0.0, 0.0, 0.0, 1.0)), "a sequence of 2 items is not a pose"),
+        ([[1, 2, 3], [0, 0, 0, 1], "odom"], "a sequence of 3 items is not a pose"),
         (
             np.array(["1", "2", "3"]),
             "a numpy array must be a 1-D numeric pose or a 4x4 matrix, got 1-D of dtype <U1",
@@ -204,6 +210,8 @@ def test_frame_keyword_is_only_for_matrices() -> None:
         (np.eye(3), "its shape is (3, 3), not (4, 4)"),
         ([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], "expected 4 rows of 4 numbers"),
         ([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 0]], "row [1, 0, 0] is not 4 numbers"),
+        ([[1, 0, 0, 0], [0, 1, 0, 0]], "expected 4 rows of 4 numbers"),
+        ([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], (0, 0, 1)], "row (0, 0, 1) is not 4 numbers"),
         (
             [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, True, 1]],
             "row [0, 0, True, 1] holds something that is not a real number",

@@ -36,6 +36,7 @@ import warnings
 from typing import TYPE_CHECKING, Any, TypeVar, TypeVarTuple
 
 if TYPE_CHECKING:
+    from collections import deque
     from collections.abc import Callable, Coroutine, Mapping
     from concurrent.futures import Executor
 
@@ -139,6 +140,39 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
                 await super().shutdown_default_executor()
             finally:
                 self._thread_jobs -= 1
+
+    def pending_timers(self) -> list[asyncio.TimerHandle]:
+        """Return the timers still to fire, earliest first (cancelled ones left out).
+
+        What the loop will wake up for if nothing else happens: a program that
+        costs no CPU while idle leaves none behind.
+
+        Example:
+            >>> async def main() -> list[float]:
+            ...     loop = asyncio.get_running_loop()
+            ...     loop.call_later(2.0, lambda: None)
+            ...     loop.call_later(1.0, lambda: None).cancel()
+            ...     return [timer.when() for timer in loop.pending_timers()]
+            >>> run(main)
+            [2.0]
+        """
+        scheduled: list[asyncio.TimerHandle] = self._scheduled  # type: ignore[attr-defined]
+        return sorted(timer for timer in scheduled if not timer.cancelled())  # by when()
+
+    def ready_callbacks(self) -> list[asyncio.Handle]:
+        """Return the callbacks queued to run at the next iteration (cancelled ones left out).
+
+        Example:
+            >>> async def main() -> int:
+            ...     loop = asyncio.get_running_loop()
+            ...     loop.call_soon(lambda: None)
+            ...     loop.call_soon(lambda: None).cancel()
+            ...     return len(loop.ready_callbacks())
+            >>> run(main)
+            1
+        """
+        ready: deque[asyncio.Handle] = self._ready  # type: ignore[attr-defined]
+        return [handle for handle in ready if not handle.cancelled()]
 
     def _thread_job_done(self, _future: asyncio.Future[Any]) -> None:
         self._thread_jobs -= 1

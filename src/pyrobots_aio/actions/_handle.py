@@ -64,10 +64,18 @@ class ActionHandle(Generic[T]):
     """A started action: await it for its result, cancel it, inspect it.
 
     Example:
-        >>> async def main() -> None:  # doctest: +SKIP
-        ...     handle = robot.walk(0.2)      # scheduled at once, not awaited
-        ...     handle.cancel("bumper hit")   # returns at once
-        ...     outcome = await handle.wait_done()   # Outcome.CANCELLED, no raise
+        >>> import asyncio
+        >>> from pyrobots_aio import Outcome, Robot, action
+        >>> @action
+        ... async def walk(robot: Robot, speed: float) -> None:
+        ...     await robot.sleep(3600)
+        >>> async def main() -> Outcome:
+        ...     async with Robot(actions=[walk]) as robot:
+        ...         handle = robot.walk(0.2)  # scheduled at once, not awaited
+        ...         handle.cancel("bumper hit")  # returns at once
+        ...         return await handle.wait_done()  # waits, never raises
+        >>> asyncio.run(main())
+        <Outcome.CANCELLED: 'cancelled'>
     """
 
     __slots__ = (

@@ -188,12 +188,23 @@ def check_blocking(blocking: object) -> bool:
 
 
 def check_numeric_key(key: str, condition: Condition, current: object) -> None:
-    """Refuse a numeric condition on a key that holds something other than a number or None."""
-    if condition.kind in _NUMERIC and current is not None and not isinstance(current, Real):
-        raise InvalidConditionError(
-            f"{condition.kind}= compares numbers, but state key {key!r} holds {current!r} "
-            f"({type(current).__name__}); use value= or becomes=, or a predicate"
-        )
+    """Refuse a numeric condition on a key that holds something other than a number or None.
+
+    A bool is refused too (``False > 0.5`` compares, but a flag has no threshold),
+    as bool targets are.
+    """
+    if condition.kind not in _NUMERIC or current is None:
+        return
+    if isinstance(current, bool):
+        fix = f"watch a flag with value= or becomes=, e.g. becomes={not current!r}"
+    elif isinstance(current, Real):
+        return
+    else:
+        fix = "use value= or becomes=, or a predicate"
+    raise InvalidConditionError(
+        f"{condition.kind}= compares numbers, but state key {key!r} holds {current!r} "
+        f"({type(current).__name__}); {fix}"
+    )
 
 
 def _is_number(value: object) -> TypeGuard[float]:

@@ -165,21 +165,18 @@ class PredicateSource:
 
         A sync predicate is evaluated now, and what it raises propagates; its
         result is observed at the next loop iteration, once ``do()`` has run.
-        An async predicate's first evaluation starts in a task.
+        An async predicate's first evaluation starts in a task. A predicate
+        that read no state key and has no ``poll`` is warned about (an async
+        one after its first evaluation): nothing would evaluate it again.
         """
         if self._is_async:
             self._evaluate()
         else:
             result = self._call()
             self._loop.call_soon(self._observe_first, result)
+            self._warn_if_deaf()
         if self._poll is not None:
             self._schedule_poll()
-        if not self._watched and self._poll is None and not self._is_async:
-            _log.warning(
-                "%s: the predicate read no state key and has no poll=; it will not be "
-                "evaluated again (read robot.state, or give poll=SECONDS)",
-                self._label,
-            )
 
     def stop(self) -> None:
         """Stop watching, polling and evaluating."""
@@ -234,7 +231,10 @@ class PredicateSource:
                         self._watch(frozenset(reads))
                 if newly_read and self._store.version() != before:
                     self._dirty = True  # a key not watched yet may have changed meanwhile
+                first = not self._reported
                 self._report(result)
+                if first:
+                    self._warn_if_deaf()
                 if not self._dirty or self._stopped:
                     break
         finally:
@@ -253,6 +253,14 @@ class PredicateSource:
         else:
             self._failures.succeeded()
         self._trigger.observe(holds, result)
+
+    def _warn_if_deaf(self) -> None:
+        if not self._watched and self._poll is None and not self._stopped:
+            _log.warning(
+                "%s: the predicate read no state key and has no poll=; it will not be "
+                "evaluated again (read robot.state, or give poll=SECONDS)",
+                self._label,
+            )
 
     # -- watching ------------------------------------------------------------------
 

@@ -67,11 +67,23 @@ def parse_pose(raw: object, *, frame: str | None = None, default_frame: str = "m
 
 
 def _looks_like_matrix(raw: object) -> TypeGuard[Matrix | Sequence[Sequence[float]]]:
+    """A 2-D array, or a sequence of rows only: 4 rows, or rows of 4 (so a bad row is named).
+
+    Anything else, such as ``((x, y, z), (qx, qy, qz, qw))`` or ``(x, y, z, b"map")``,
+    is read as one of the other formats, whose error lists them all.
+    """
     if isinstance(raw, np.ndarray):
         return raw.ndim == 2
-    if isinstance(raw, str | bytes) or not isinstance(raw, Sequence):
+    if not _is_row(raw) or not all(_is_row(row) for row in raw):
         return False
-    return any(isinstance(row, np.ndarray | Sequence) and not isinstance(row, str) for row in raw)
+    return len(raw) == 4 or (len(raw) > 0 and all(len(row) == 4 for row in raw))
+
+
+def _is_row(item: object) -> TypeGuard[Sequence[Any] | NDArray[Any]]:
+    """A numpy array of numbers or a sequence other than text (a str or bytes is no row)."""
+    if isinstance(item, np.ndarray):
+        return item.ndim >= 1
+    return isinstance(item, Sequence) and not isinstance(item, str | bytes)
 
 
 def _parse(raw: object, frame: str | None, default_frame: str) -> Pose:
