@@ -11,6 +11,8 @@ from __future__ import annotations
 import asyncio
 import enum
 import logging
+import traceback
+import weakref
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from .._exceptions import ActionInterrupted, ActionSkipped
@@ -19,6 +21,7 @@ from ._where import definition, location
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Generator
+    from types import TracebackType
 
     from ._executive import Executive
 
@@ -93,6 +96,7 @@ class ActionHandle(Generic[T]):
         "_outcome",
         "_phase",
         "_task",
+        "_unretrieved",
         "_value",
         "_waiters",
         "awaiting",
@@ -136,6 +140,7 @@ class ActionHandle(Generic[T]):
         self._waiters: list[asyncio.Future[None]] | None = None
         self._callbacks: list[Callable[[], None]] | None = None
         self._finalizers: list[Callable[[], None]] | None = None
+        self._unretrieved: weakref.finalize[Any, Any] | None = None
 
     # -- awaiting ---------------------------------------------------------
 
@@ -172,6 +177,7 @@ class ActionHandle(Generic[T]):
             except asyncio.CancelledError:
                 self.cancel("the task awaiting it was cancelled")
                 raise
+        self._retrieved()
         return self._outcome
 
     # -- inspecting -------------------------------------------------------
@@ -234,6 +240,7 @@ class ActionHandle(Generic[T]):
         if self._phase != _DONE:
             msg = f"action {self.name}#{self.id} is not done yet; await it or use wait_done()"
             raise asyncio.InvalidStateError(msg)
+        self._retrieved()
         return self._error
 
     def childof(self, other: ActionHandle[Any]) -> bool:
@@ -326,18 +333,31 @@ class ActionHandle(Generic[T]):
                     fut.set_result(None)
                     waiting = True
             self._waiters = None
+        self._task = None  # the task's context refers back to this handle
         if self._outcome is Outcome.FAILED and not waiting:
-            _log.error(
-                "action %s#%d failed and nobody is waiting for it",
-                self.name,
-                self.id,
-                exc_info=self._error,
-            )
+            self._report_unless_retrieved()
         self._executive.finished(self)
         if self._callbacks is not None:
             callbacks, self._callbacks = self._callbacks, None
             for callback in callbacks:
                 callback()
+
+    def _report_unless_retrieved(self) -> None:
+        """Log the failure once this handle is forgotten, unless its error was retrieved.
+
+        Like asyncio's "exception was never retrieved": a handle kept and awaited
+        later is not reported. The traceback keeps its lines but not the finished
+        frames' locals, so nothing in it keeps this handle alive.
+        """
+        error = self._error
+        if error is not None and error.__traceback__ is not None:
+            traceback.clear_frames(error.__traceback__)
+        self._unretrieved = weakref.finalize(self, _report_failure, self.name, self.id, error)
+
+    def _retrieved(self) -> None:
+        if self._unretrieved is not None:
+            self._unretrieved.detach()
+            self._unretrieved = None
 
     def _run_finalizers(self) -> None:
         if self._finalizers is None:
@@ -374,6 +394,9 @@ async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
         if handle._children:
             await executive.reap_children(handle)
     finally:
+        if handle._cancel_requested and handle._outcome is Outcome.SUCCEEDED:
+            # cancelled while its children wound up: CANCELLED (a failure is never masked)
+            handle._settle(Outcome.CANCELLED, error=handle._interrupted())
         handle._complete()
 
 
@@ -394,7 +417,7 @@ async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> No
             )
             handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
         else:
-            handle._settle(Outcome.FAILED, error=exc)
+            handle._settle(Outcome.FAILED, error=exc.with_traceback(_without_this_frame(exc)))
     except BaseException as exc:  # KeyboardInterrupt, SystemExit: record, then let through
         handle._settle(Outcome.FAILED, error=exc)
         handle._complete()
@@ -404,3 +427,13 @@ async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> No
             handle._settle(Outcome.CANCELLED, value, handle._interrupted())
         else:
             handle._settle(Outcome.SUCCEEDED, value)
+
+
+def _without_this_frame(error: BaseException) -> TracebackType | None:
+    """The traceback of ``error`` from the action's own code on (this module's frame dropped)."""
+    tb = error.__traceback__
+    return tb.tb_next if tb is not None else None
+
+
+def _report_failure(name: str, ident: int, error: BaseException | None) -> None:
+    _log.error("action %s#%d failed and nobody is waiting for it", name, ident, exc_info=error)
