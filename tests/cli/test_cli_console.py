@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import io
 import logging
+import subprocess
+import sys
 from typing import TYPE_CHECKING
 
 import pytest
@@ -111,12 +113,64 @@ def test_install_replaces_the_previous_handler_and_sets_the_level() -> None:
         target.setLevel(logging.NOTSET)
 
 
-def test_the_library_installs_no_handler() -> None:
-    import pyrobots_aio.cli
-    import pyrobots_aio.recording  # noqa: F401
+NO_HANDLER_SCRIPT = """
+import asyncio, importlib, logging, pkgutil
 
-    for name in ("", "pyrobots_aio"):
-        assert not [h for h in logging.getLogger(name).handlers if isinstance(h, ConsoleHandler)]
+def handlers():
+    # the root's and pyrobots_aio's handlers, and those of any pyrobots_aio.* logger
+    found = {"": [], "pyrobots_aio": []}
+    for name in sorted({"", "pyrobots_aio", *logging.root.manager.loggerDict}):
+        if name in ("", "pyrobots_aio") or name.startswith("pyrobots_aio."):
+            for handler in logging.getLogger(name).handlers:
+                found.setdefault(name, []).append(repr(handler))
+    return found
+
+before = handlers()
+import pyrobots_aio
+for module in pkgutil.walk_packages(pyrobots_aio.__path__, "pyrobots_aio."):
+    if not module.name.endswith("__main__"):  # that one runs the command
+        importlib.import_module(module.name)
+
+from pyrobots_aio import Robot, action
+from pyrobots_aio.sim import SimRobot, run
+
+@action
+async def nap(robot):
+    await robot.sleep(0.1)
+    logging.getLogger("pyrobots_aio.test").warning("a record")
+
+async def plain():
+    async with Robot() as robot:
+        await nap(robot)
+
+async def simulated():
+    async with SimRobot() as robot:
+        await nap(robot)
+        await robot.drive_distance(0.05)
+
+asyncio.run(plain())
+run(simulated)
+print(before)
+print(handlers())
+"""
+
+
+def test_the_library_installs_no_handler() -> None:
+    # A fresh interpreter: what this test session imported and configured does not count.
+    done = subprocess.run(
+        [sys.executable, "-c", NO_HANDLER_SCRIPT],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [
+        "{'': [], 'pyrobots_aio': []}",  # before importing the library
+        "{'': [], 'pyrobots_aio': []}",  # after importing all of it, running Robot and SimRobot
+    ]
+    # Each run's record reached logging's last resort: nobody configured logging.
+    assert done.stderr == "a record\n" * 2
 
 
 @pytest.mark.parametrize(

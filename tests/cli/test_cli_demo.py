@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import pty
+import re
 import subprocess
 import sys
 from typing import TYPE_CHECKING
@@ -65,7 +66,8 @@ def test_the_demo_runs_records_and_summarises(
     reports = [line for line in out if line.startswith("random walk: ")]
     assert len(reports) == 1
     assert f"{summary.monitor_firings.get('bumper becomes=True', 0)} bumps" in reports[0]
-    assert reports[0].endswith("real time")
+    assert " (lockstep, x" in reports[0]
+    assert reports[0].endswith(" real time)")
     assert format_summary(summary) in done.stdout
     assert done.stdout.endswith(
         f"recorded to {path}; see its timeline with: pyrobots-aio replay {path} "
@@ -82,6 +84,34 @@ def test_the_demo_runs_records_and_summarises(
     )
     assert format_summary(summary) in capsys.readouterr().out
     assert _events(load(again)) == _events(recording)
+
+
+def test_realtime_follows_the_wall_clock(tmp_path: Path) -> None:
+    # About 21 s: undocking, driving out and docking take 20.84 simulated seconds.
+    path = tmp_path / "walk.jsonl"
+    done = subprocess.run(
+        [*COMMAND, "--realtime", "--duration", "0.5", "--record", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    reports = [line for line in done.stdout.splitlines() if line.startswith("random walk: ")]
+    assert len(reports) == 1
+    found = re.search(
+        r"; (\d+\.\d\d) s simulated in (\d+\.\d\d) s \(realtime, x(\d\.\d\d) real time\)$",
+        reports[0],
+    )
+    assert found is not None, reports[0]
+    simulated, wall, ratio = (float(group) for group in found.groups())
+    # Loop time is the wall clock: the run cannot get ahead of it (lockstep runs x50 and more).
+    assert simulated <= wall
+    assert ratio <= 1.0
+    recording = load(path)
+    assert recording.complete
+    assert recording.duration + 0.005 >= simulated  # the walk is recorded whole (2 decimals)
+    assert format_summary(summarize(recording)) in done.stdout
 
 
 def test_without_record_the_summary_comes_from_memory(capsys: pytest.CaptureFixture[str]) -> None:

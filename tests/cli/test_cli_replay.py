@@ -8,7 +8,10 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from pyrobots_aio import Robot
 from pyrobots_aio.cli import main
+from pyrobots_aio.recording import McapRecorder
+from pyrobots_aio.sim import run
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -23,6 +26,7 @@ SUMMARY = [
     "  action  count  ok  failed  cancelled  skipped  min s  median s  max s",
     "  greet       1   1       0          0        0  3.000     3.000  3.000",
     "  wave        3   2       0          1        0  1.000     1.000  2.000",
+    "  (durations: from action.started to done, waits for resources included)",
     "",
     "  resource  held s     use  acquired  waits  max wait s  preempted",
     "  arm        4.000  100.0%         3      0       0.000          0",
@@ -88,6 +92,26 @@ def test_replay_of_something_else_fails_cleanly(tmp_path: Path) -> None:
     assert done.stderr == (
         f"pyrobots-aio: error: {other}:1: not valid JSON: Expecting value at column 1\n"
     )
+
+
+def test_replay_of_an_mcap_file_says_what_it_reads(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    run(_record_mcap, path)
+    assert path.read_bytes().startswith(b"\x89MCAP0\r\n")
+    done = _cli("replay", str(path))
+    assert (done.returncode, done.stdout) == (1, "")
+    assert done.stderr == (
+        f"pyrobots-aio: error: {path} is an MCAP file (McapRecorder: open it in Foxglove); "
+        "pyrobots-aio replay and load() read JSON Lines recordings: record one with "
+        "JsonlRecorder, or with pyrobots-aio demo random-walk --record PATH.jsonl\n"
+    )
+
+
+async def _record_mcap(path: Path) -> None:
+    robot = Robot()
+    with McapRecorder(path).attach(robot):
+        async with robot:
+            await robot.sleep(1.0)
 
 
 @pytest.mark.parametrize(

@@ -1,15 +1,17 @@
-"""The MCAP recorder: JSON messages on JSON-schema channels (Foxglove), and its missing extra."""
+"""The MCAP recorder: strict JSON messages on JSON-schema channels (Foxglove), its missing extra."""
 
 from __future__ import annotations
 
 import json
 import sys
+from math import inf, nan
 from typing import TYPE_CHECKING
 
+import numpy as np
 import pytest
 
-from pyrobots_aio import RecordingError
-from pyrobots_aio.recording import McapRecorder, MemoryRecorder
+from pyrobots_aio import RecordingError, Robot
+from pyrobots_aio.recording import McapRecorder, MemoryRecorder, load
 
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable
@@ -83,3 +85,56 @@ def test_without_the_mcap_extra_the_error_names_it(
     assert str(info.value) == MISSING
     assert isinstance(info.value.__cause__, ImportError)
     assert not (tmp_path / "run.mcap").exists()
+
+
+def _strict_json(text: str | bytes) -> object:
+    """Parse as JSON proper: NaN and Infinity, which Foxglove refuses, raise."""
+
+    def refuse(constant: str) -> object:
+        raise ValueError(f"not JSON: {constant}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_non_finite_floats_are_written_as_null(tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    path = tmp_path / "run.mcap"
+    robot = Robot()
+    with McapRecorder(path, state_keys=["range", "ranges"], metadata={"gain": nan}).attach(robot):
+        async with robot:
+            robot.state.update(range=nan, ranges=np.array([0.5, inf, -inf]))
+            await robot.sleep(0.5)
+            robot.state.range = 1.5
+    with path.open("rb") as file:
+        reader = make_reader(file)
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        values = [
+            (c.topic, _strict_json(m.data)["value"])  # type: ignore[index]
+            for _, c, m in reader.iter_messages()
+        ]
+    assert values == [
+        ("/pyrobots/state/range", None),
+        ("/pyrobots/state/ranges", [0.5, None, None]),
+        ("/pyrobots/state/range", 1.5),
+    ]
+    assert _strict_json(metadata["pyrobots_aio"]["metadata"]) == {"gain": None}
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_load_says_an_mcap_file_is_not_json_lines(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    robot = Robot()
+    with McapRecorder(path).attach(robot):
+        async with robot:
+            await robot.sleep(0.5)
+    with pytest.raises(RecordingError) as info:
+        load(path)
+    assert str(info.value) == (
+        f"{path} is an MCAP file (McapRecorder: open it in Foxglove); pyrobots-aio replay "
+        "and load() read JSON Lines recordings: record one with JsonlRecorder, or with "
+        "pyrobots-aio demo random-walk --record PATH.jsonl"
+    )

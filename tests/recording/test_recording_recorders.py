@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import math
 import re
 from typing import TYPE_CHECKING
 
@@ -75,6 +76,58 @@ async def test_numpy_values_are_written_as_json(tmp_path: Path) -> None:
             robot.state.update(ranges=np.array([0.5, 1.0]), speed=np.float64(0.25), tags={"a"})
     values = {e.name: e.data["value"] for e in load(path).events}
     assert values == {"ranges": [0.5, 1.0], "speed": 0.25, "tags": ["a"]}
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_lines_are_strict_json_non_finite_floats_null(tmp_path: Path) -> None:
+    def refuse(constant: str) -> object:
+        raise ValueError(f"not JSON: {constant}")
+
+    path = tmp_path / "nan.jsonl"
+    robot = Robot()
+    keys = ["range", "ranges", "pose"]
+    with JsonlRecorder(path, state_keys=keys, metadata={"gain": math.nan}).attach(robot):
+        async with robot:
+            robot.state.update(range=math.nan, ranges=np.array([0.1 + 0.2, math.inf]))
+            robot.state.pose = {"x": -math.inf, "y": (1e-300, math.nan)}
+            await robot.sleep(0.5)
+            robot.state.range = 1 / 3
+    lines = path.read_text().splitlines()
+    assert [json.loads(line, parse_constant=refuse) for line in lines]  # every line parses
+    recording = load(path)
+    assert recording.header.metadata == {"gain": None}
+    assert [(e.name, e.data["value"]) for e in recording.events] == [
+        ("range", None),
+        ("ranges", [0.1 + 0.2, None]),  # finite values come back exactly
+        ("pose", {"x": None, "y": [1e-300, None]}),
+        ("range", 1 / 3),
+    ]
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_a_sample_keeps_the_value_it_had_among_batched_action_events(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "run.jsonl"
+    robot = Robot()
+    seen = [1]
+    with JsonlRecorder(path, state_keys=["seen"], sample_rate=None).attach(robot):
+        async with robot:
+            handle = nap(robot, 1.0)  # its events wait in the batch
+            await robot.sleep(0.5)
+            robot.state.seen = seen
+            seen.append(2)  # changed in place: no new sample, and the recorded one stays [1]
+            await handle
+            robot.state.seen = [1, 2, 3]
+    assert [(e.kind.value, e.time, e.data.get("value")) for e in load(path).events] == [
+        ("action.spawned", 0.0, None),
+        ("action.started", 0.0, None),
+        ("state.sample", 0.5, [1]),
+        ("action.finished", 1.0, None),
+        ("state.sample", 1.0, [1, 2, 3]),
+    ]
 
 
 @pytest.mark.virtual_time

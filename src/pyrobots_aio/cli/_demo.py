@@ -59,12 +59,15 @@ def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
         "--duration",
         type=positive_seconds,
         metavar="SECONDS",
-        help=f"keep wandering this many simulated seconds (default: {DEFAULT_MOVES} moves)",
+        help="make random moves until this many simulated seconds have passed since the "
+        "start; the move under way and docking come on top, so the run lasts longer "
+        f"(default: {DEFAULT_MOVES} moves)",
     )
     walk.add_argument(
         "--realtime",
         action="store_true",
-        help="follow the wall clock (default: lockstep, as fast as possible)",
+        help="follow the wall clock (default: lockstep, as fast as possible); undocking, "
+        "driving out and docking alone take about 20 s",
     )
     walk.add_argument("--record", metavar="PATH", help="record the run to this JSON Lines file")
     walk.add_argument(
@@ -145,12 +148,15 @@ def _walk(
     return main
 
 
-def _report(report: WalkReport, wall: float) -> str:
-    speed = f", x{report.sim_time / wall:.0f} real time" if wall > 0 else ""
+def _report(report: WalkReport, wall: float, *, realtime: bool) -> str:
+    ratio = report.sim_time / wall if wall > 0 else 0.0
+    speed = f"x{ratio:.0f}" if ratio >= 10 else f"x{ratio:.2f}"
+    mode = "realtime" if realtime else "lockstep"
     docked = "docked" if report.docked else "NOT docked"
     return (
         f"random walk: {report.moves} moves, {report.bumps} bumps, {report.interrupted} moves "
-        f"interrupted, {docked}; {report.sim_time:.2f} s simulated in {wall:.2f} s{speed}"
+        f"interrupted, {docked}; {report.sim_time:.2f} s simulated in {wall:.2f} s "
+        f"({mode}, {speed} real time)"
     )
 
 
@@ -166,7 +172,8 @@ def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> in
     finally:
         recorder.close()
         show.close()
-    print(_report(report, time.perf_counter() - show.wall_start), file=out)
+    wall = time.perf_counter() - show.wall_start
+    print(_report(report, wall, realtime=options.realtime), file=out)
     recording: Recording
     recording = load(recorder.path) if isinstance(recorder, JsonlRecorder) else recorder.recording()
     print("", format_summary(summarize(recording)), sep="\n", file=out)

@@ -21,10 +21,15 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="summarise a recording and draw its timeline",
         description="Print the summary of a JSON Lines recording (actions and events per "
         "minute, peak concurrency, durations per action, resource use, cancellations) and, "
-        "with --timeline, write its timeline as a self-contained HTML page.",
+        "with --timeline, write its timeline as a self-contained HTML page. An action's "
+        "duration runs from its start (action.started) to its end, so it includes any wait "
+        "for a resource.",
     )
     replay.add_argument(
-        "path", metavar="PATH", help="a recording (pyrobots-aio demo --record, JsonlRecorder)"
+        "path",
+        metavar="PATH",
+        help="a JSON Lines recording (pyrobots-aio demo random-walk --record PATH.jsonl, "
+        "JsonlRecorder)",
     )
     replay.add_argument("--timeline", metavar="OUT.html", help="write the timeline page here")
     replay.set_defaults(command=run_replay)

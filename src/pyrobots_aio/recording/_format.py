@@ -10,6 +10,8 @@ if TYPE_CHECKING:
     from ._summary import Summary
 
 _SHOWN = 20  # list items shown before "... and N more"
+DURATIONS = "  (durations: from action.started to done, waits for resources included)"
+"""The note under the per-action table: a body starts before its ``@lock`` waits."""
 
 
 def _seconds(value: float | None) -> str:
@@ -80,7 +82,7 @@ def _actions(summary: Summary) -> list[str]:
         ]
         for s in summary.per_action
     ]
-    return ["", *table(header, rows)]
+    return ["", *table(header, rows), DURATIONS]
 
 
 def _resources(summary: Summary) -> list[str]:

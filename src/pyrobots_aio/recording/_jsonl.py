@@ -1,12 +1,20 @@
 """The JSON Lines recorder: one JSON object per line, written in bulk.
 
-``on_event`` runs inside the executive, once per event, so it only encodes the
-event (a cached tail for the repetitive action events) and appends the line to
-a buffer. The buffer is written when it holds ``buffer_size`` lines,
-``flush_interval`` seconds (loop time) after its first line, and on close: a
-write costs a fraction of a millisecond, and a crash loses at most that much.
-Measured on the action benchmark, recording costs the executive about 1.9x
-(a no-op instrument alone costs about 1.4x).
+``on_event`` runs inside the executive, once per event, so it does as little
+as it can. Action events (spawned, started, finished: the bulk of a run) are
+gathered in a small batch and encoded together, each with the cached end of
+its line (kind, name, data: the same from one action to the next of a name);
+other events are encoded at once, so that a state sample keeps the value it
+had. Lines are written when ``buffer_size`` of them are waiting,
+``flush_interval`` seconds (loop time) after the first, and on close: a write
+costs a fraction of a millisecond, and a crash loses at most that much.
+Measured on the action benchmark (tests/bench/bench_recording.py), recording
+costs the executive about 1.8x, of which about 1.45x is the instrumentation
+hook itself (a no-op instrument) and most of the rest turning loop times
+into text (``repr`` of a float).
+
+The lines are strict JSON: a non-finite float (NaN, Infinity), which JSON
+cannot write, is recorded as null.
 """
 
 from __future__ import annotations
@@ -14,6 +22,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import math
 import os
 from typing import IO, TYPE_CHECKING, Any
 
@@ -39,9 +48,44 @@ def _jsonable(value: object) -> object:
     return repr(value)
 
 
-_encode = json.JSONEncoder(
-    separators=(",", ":"), ensure_ascii=False, check_circular=False, default=_jsonable
-).encode
+def _finite(value: object) -> object:
+    """``value`` with each non-finite float (NaN, Infinity) replaced by None, for strict JSON."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if value is None or isinstance(value, str | int):
+        return value
+    if isinstance(value, dict):
+        return {
+            repr(k) if isinstance(k, float) and not math.isfinite(k) else k: _finite(v)
+            for k, v in value.items()
+        }
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return _finite(_jsonable(value))
+
+
+def _strict(encode: Callable[[Any], str]) -> Callable[[Any], str]:
+    """``encode`` (which refuses NaN and Infinity), retried with those as null."""
+
+    def strict(value: Any) -> str:
+        try:
+            return encode(value)
+        except ValueError:  # "Out of range float values are not JSON compliant"
+            return encode(_finite(value))
+
+    return strict
+
+
+_encode = _strict(
+    json.JSONEncoder(
+        separators=(",", ":"),
+        ensure_ascii=False,
+        check_circular=False,
+        allow_nan=False,
+        default=_jsonable,
+    ).encode
+)
+"""Compact strict JSON; what ``json`` cannot encode goes through `_jsonable`."""
 
 
 def _data_encoder() -> Callable[[Mapping[str, object]], str]:
@@ -53,22 +97,22 @@ def _data_encoder() -> Callable[[Mapping[str, object]], str]:
     make = getattr(json.encoder, "c_make_encoder", None)
     if make is None:  # Pythons without the C accelerator
         return _encode
+    # markers, default, encoder, indent, key and item separators, sort_keys, skipkeys, allow_nan
     encoder = make(
-        None, _jsonable, json.encoder.encode_basestring, None, ":", ",", False, False, True
+        None, _jsonable, json.encoder.encode_basestring, None, ":", ",", False, False, False
     )
-
-    def encode(data: Mapping[str, object]) -> str:
-        return "".join(encoder(data, 0))
-
-    return encode
+    return _strict(lambda data: "".join(encoder(data, 0)))
 
 
 _encode_data = _data_encoder()
-_CACHED_KINDS = frozenset(
+_BATCHED = frozenset(
     {EventKind.ACTION_SPAWNED, EventKind.ACTION_STARTED, EventKind.ACTION_FINISHED}
 )
-"""Kinds whose lines end alike (``"kind":..,"name":"walk","data":{"parent":1}}``): cached."""
-_CACHE_SIZE = 4096
+"""Kinds encoded in batches, with cached line ends: their data are the executive's own
+ints, strings and None, which do not change once emitted."""
+BATCH = 64
+"""Most action events kept before they are encoded: few enough that they die young
+(events kept longer would outlive garbage-collector generations and slow every collection)."""
 
 
 class JsonlRecorder(Recorder):
@@ -120,26 +164,45 @@ class JsonlRecorder(Recorder):
         self.buffer_size = buffer_size
         self.flush_interval = float(flush_interval)
         self._file: IO[str] | None = None
-        self._pending: list[str] = []
+        self._batch: list[ExecEvent] = []  # action events not yet encoded
+        self._batch_size = min(BATCH, buffer_size)
+        self._lines: list[str] = []  # encoded, not yet written
         self._timer: asyncio.TimerHandle | None = None
-        self._tails: dict[tuple[object, ...], str] = {}
+        # For each batched kind and action name: the data of its last event and its line end.
+        self._ends: dict[EventKind, dict[str | None, tuple[Mapping[str, object], str]]] = {
+            kind: {} for kind in _BATCHED
+        }
 
     def on_event(self, event: ExecEvent) -> None:
-        """Encode one event into the buffer; write the buffer when it is full."""
-        # Encoding now, not at flush, lets the event die at once: buffered events
-        # would survive into older GC generations and slow every collection.
-        pending = self._pending
-        pending.append(self._line(event))
+        """Take one event: batch it (action events) or encode it now; write when enough wait."""
+        if event.kind in _BATCHED:
+            batch = self._batch
+            batch.append(event)
+            if (n := len(batch)) == 1 or n >= self._batch_size:
+                self._batched(event.time)
+            return
+        if self._batch:  # keep the order of events
+            self._encode_batch()
+        lines = self._lines
+        lines.append(self._line(event))
         self._last_time = event.time
-        if len(pending) == 1:
+        if len(lines) == 1:
             self._first_pending(event.time)
-        elif len(pending) >= self.buffer_size:
-            self.flush()
+        if len(lines) >= self.buffer_size:
+            self._write()
+
+    def _batched(self, time: float) -> None:
+        """The batch just got its first event, or is full."""
+        if len(self._batch) == 1:
+            self._first_pending(time)
+        if len(self._batch) >= self._batch_size:
+            self._encode_batch()
 
     def _first_pending(self, time: float) -> None:
-        """The buffer just got its first event: check the state, plan a timed flush."""
+        """Something waits to be written: check the state, plan a timed flush."""
         if self._closed:
-            self._pending.clear()
+            self._batch.clear()
+            self._lines.clear()
             self._dropped()
             return
         if not self._opened:
@@ -157,30 +220,38 @@ class JsonlRecorder(Recorder):
 
     def flush(self) -> None:
         """Write the buffered events now."""
-        pending = self._pending
-        if not pending or self._file is None:
+        if self._batch:
+            self._encode_batch()
+        self._write()
+
+    def _write(self) -> None:
+        lines = self._lines
+        if not lines or self._file is None:
             return
-        self._pending = []
-        self._count += len(pending)
-        self._file.write("".join(pending))
+        self._lines = []
+        self._count += len(lines)
+        self._file.write("".join(lines))
         self._file.flush()
 
-    def _line(self, event: ExecEvent) -> str:
-        # Lines are '{"t":..,"action":..' and a tail that repeats from action to
-        # action (kind, name, data), so the tails of action events are cached.
+    def _encode_batch(self) -> None:
+        batch, self._batch = self._batch, []
+        lines, ends = self._lines, self._ends
+        for event in batch:
+            known = ends[event.kind]
+            end = known.get(event.name)
+            # Equal data give the same JSON here: the executive's values are ints, strings, None.
+            if end is None or end[0] != event.data:
+                end = known[event.name] = (event.data, self._tail(event))
+            action = "null" if event.action is None else event.action
+            lines.append(f'{{"t":{event.time!r},"action":{action}{end[1]}')
+        self._last_time = batch[-1].time
+        if len(lines) >= self.buffer_size:
+            self._write()
+
+    @staticmethod
+    def _line(event: ExecEvent) -> str:
         action = "null" if event.action is None else event.action
-        if event.kind not in _CACHED_KINDS:
-            return f'{{"t":{event.time!r},"action":{action}{self._tail(event)}'
-        try:
-            key = (event.kind, event.name, *event.data.items())
-            tail = self._tails.get(key)
-        except TypeError:  # an unhashable value
-            return f'{{"t":{event.time!r},"action":{action}{self._tail(event)}'
-        if tail is None:
-            if len(self._tails) >= _CACHE_SIZE:
-                self._tails.clear()
-            tail = self._tails[key] = self._tail(event)
-        return f'{{"t":{event.time!r},"action":{action}{tail}'
+        return f'{{"t":{event.time!r},"action":{action}{JsonlRecorder._tail(event)}'
 
     @staticmethod
     def _tail(event: ExecEvent) -> str:
@@ -206,4 +277,5 @@ class JsonlRecorder(Recorder):
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "open"
-        return f"<JsonlRecorder {self.path!r} {state}, {self._count + len(self._pending)} events>"
+        events = self._count + len(self._lines) + len(self._batch)
+        return f"<JsonlRecorder {self.path!r} {state}, {events} events>"

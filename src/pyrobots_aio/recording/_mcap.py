@@ -5,18 +5,19 @@ Foxglove opens the file as it is: the executive events go to
 sampled state key to ``/pyrobots/state/<key>`` (plot ``.value``). Message
 times are the run's wall-clock start plus the loop time elapsed since, so
 Foxglove shows the date of the run; each message also carries the loop time.
+Messages are strict JSON, which Foxglove requires: a non-finite float (NaN,
+Infinity) is written as null.
 """
 
 from __future__ import annotations
 
 import datetime
-import json
 import os
 from typing import TYPE_CHECKING, Any
 
 from pyrobots_aio import RecordingError
 
-from ._jsonl import _jsonable
+from ._jsonl import _encode
 from ._recorder import Recorder
 
 if TYPE_CHECKING:
@@ -54,7 +55,6 @@ STATE_SCHEMA: dict[str, Any] = {
 """The JSON schema of state sample messages."""
 
 _TOPICS = {"action": "/pyrobots/actions", "resource": "/pyrobots/resources"}
-_encode = json.JSONEncoder(separators=(",", ":"), default=_jsonable).encode
 
 
 def _writer_class() -> type[Writer]:

@@ -30,6 +30,8 @@ VERSION = 1
 """The format version this library writes and reads."""
 
 _KINDS = {kind.value: kind for kind in EventKind}
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+"""How an MCAP file starts (`McapRecorder` writes them)."""
 
 
 class _Bad(Exception):
@@ -172,6 +174,14 @@ def event_from_json(obj: object) -> ExecEvent:
 def _lines(path: str) -> Generator[tuple[int, str, bool], None, None]:
     """Each line's number, text, and whether it ended with a newline."""
     with open(path, "rb") as file:
+        if file.read(len(MCAP_MAGIC)) == MCAP_MAGIC:
+            msg = (
+                f"{path} is an MCAP file (McapRecorder: open it in Foxglove); pyrobots-aio "
+                "replay and load() read JSON Lines recordings: record one with JsonlRecorder, "
+                "or with pyrobots-aio demo random-walk --record PATH.jsonl"
+            )
+            raise RecordingError(msg)
+        file.seek(0)
         for number, raw in enumerate(file, start=1):
             try:
                 text = raw.decode("utf-8")
@@ -271,7 +281,8 @@ def load(path: str | os.PathLike[str], *, strict: bool = True) -> Recording:
     Raises:
         CorruptRecordingError: A line cannot be read; the error names the file
             and the 1-based line number (``.path``, ``.line``).
-        RecordingError: The file was written by a newer format version.
+        RecordingError: The file was written by a newer format version, or is an
+            MCAP file (`McapRecorder`), which this reader does not read.
         OSError: The file cannot be opened.
 
     Example:

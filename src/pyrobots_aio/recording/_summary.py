@@ -53,8 +53,10 @@ class Outcomes:
 class ActionStats:
     """Counts and durations of one action (by name).
 
-    Durations run from the body's start to the action being done (cleanup and
-    children included), over the actions that finished; None if none did.
+    Durations run from the body's start (``action.started``) to the action
+    being done, over the actions that finished (None if none did): cleanup and
+    children are included, and so is any wait for a resource, since an
+    action's ``@lock`` is taken once its body has started.
     """
 
     name: str
