@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import time
 
+import mujoco
+
 from pyrobots_aio.sim import SimRobot, SimWorld
 from pyrobots_aio.sim import run as run_lockstep
 from pyrobots_aio.sim.random_walk import random_walk
@@ -13,6 +15,7 @@ WALK_SECONDS = 300.0
 
 
 def _tick_cost() -> dict[str, float]:
+    """One control tick of SimWorld, and, as a yardstick, ten bare mj_step of the same model."""
     world = SimWorld()
     world.set_command(0.2, 0.3)
     ticks = 2_000
@@ -21,7 +24,12 @@ def _tick_cost() -> dict[str, float]:
         world.step(10)
         world.read_sensors()
     physics = (time.perf_counter() - start) / ticks
-    return {"physics_tick_us": physics * 1e6}
+    model, data = world._model, world._data
+    start = time.perf_counter()
+    for _ in range(ticks):
+        mujoco.mj_step(model, data, nstep=10)
+    bare = (time.perf_counter() - start) / ticks
+    return {"physics_tick_us": physics * 1e6, "bare_mj_step_x10_us": bare * 1e6}
 
 
 async def _idle() -> float:

@@ -3,11 +3,18 @@ from __future__ import annotations
 import asyncio
 import itertools
 import math
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
 from pyrobots_aio import ActionInterrupted, LockstepError, Outcome
 from pyrobots_aio.sim import WHEELS, SimRobot, run
+from pyrobots_aio.sim._robot import ANGLE_TOLERANCE
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping
+
+    from pyrobots_aio.actions import ActionHandle
 
 pytestmark = pytest.mark.virtual_time
 
@@ -110,23 +117,109 @@ async def test_cancelling_a_motion_stops_the_wheels_and_releases_them() -> None:
         assert handle.outcome is Outcome.CANCELLED
 
 
-async def _trajectory(seed: int) -> list[tuple[float, float, float]]:
-    poses = []
+IR_RANGE = 0.4
+
+
+async def _trajectory(seed: int) -> list[tuple[float, ...]]:
+    """Leave the dock, turn north, drive up to the north wall: pose and IR at every tick."""
+    rows: list[tuple[float, ...]] = []
     async with SimRobot(seed=seed) as robot:
+        ir = sorted(k for k in robot.state if k.startswith("ir_"))
+
+        def record(changes: Mapping[str, Any]) -> None:
+            rows.append((*robot.world.base_pose(), *(changes[k] for k in ir)))
+
+        subscription = robot.state.subscribe(record, ir)
         await robot.undock()
-        walk = robot.drive_distance(0.6)
-        for _ in range(100):
-            await robot.sleep(0.05)
-            poses.append(robot.world.base_pose())
-        await walk
-        await robot.rotate_angle(1.0)
-        poses.append(robot.world.base_pose())
-        poses.append(tuple(robot.state[k] for k in sorted(robot.state) if k.startswith("ir_")))
-    return poses
+        await robot.rotate_angle(math.pi / 2)
+        await robot.drive_distance(1.6)  # stops 0.17 m short of the wall
+        await robot.rotate_angle(-1.0)  # sweeps the IR along the wall
+        subscription.close()
+    return rows
 
 
-def test_same_seed_same_trajectory() -> None:
-    assert run(_trajectory, 7) == run(_trajectory, 7)
+def test_same_seed_same_trajectory_and_another_seed_other_ir_noise() -> None:
+    first = run(_trajectory, 7)
+    seen = [value for row in first for value in row[3:] if value < IR_RANGE]
+    assert len(seen) >= 300  # the IR saw the wall: noisy readings, which the seed decides
+    assert first == run(_trajectory, 7)
+    other = run(_trajectory, 8)
+    assert [row[:3] for row in other] == [row[:3] for row in first]  # the physics is the same
+    assert other != first
+
+
+@pytest.mark.asyncio
+async def test_the_world_clock_is_the_loop_clock_whenever_the_robot_starts() -> None:
+    await asyncio.sleep(5.01)  # the loop's clock runs before the robot does
+    robot = SimRobot()
+    async with robot:
+        assert robot.world.time == robot.time() == 5.01
+        await robot.sleep(1.0)
+        assert robot.world.time == robot.time() == pytest.approx(6.01)
+        assert robot.state.timestamp("v") == robot.time()
+        assert robot.world.steps == 500
+    await asyncio.sleep(2.0)  # between runs the simulation is paused
+    async with robot:
+        assert robot.world.steps == 500
+        assert robot.world.time == robot.time() == pytest.approx(8.01)
+        await robot.sleep(0.5)
+        assert robot.world.time == robot.time() == pytest.approx(8.51)
+        assert robot.world.steps == 750
+
+
+# rotate_angle turns on odometry and stops at the control tick nearest the goal: at most
+# half a tick (0.02 s) at its slowest turn (0.15 rad/s) off. The true heading is further
+# off by the wheels coasting to a halt and by the odometry's slip: about 0.05% of the turn
+# here, allowed 0.06%.
+STOP_ERROR = 0.15 * 0.02 / 2
+COAST = 0.0005
+SLIP = 0.0006
+
+
+@pytest.mark.asyncio
+@pytest.mark.parametrize("angle", [0.05, math.pi / 2, -math.pi, -2 * math.pi, 4 * math.pi])
+async def test_rotate_angle_turns_the_true_heading(angle: float) -> None:
+    async with SimRobot() as robot:
+        await robot.undock()
+        x0, y0, yaw0 = robot.world.base_pose()
+        turned = await robot.rotate_angle(angle)
+        await robot.sleep(0.5)  # at rest
+        x, y, yaw = robot.world.base_pose()
+        assert abs(turned - angle) <= STOP_ERROR < ANGLE_TOLERANCE
+        assert abs(math.remainder(yaw - yaw0 - angle, math.tau)) <= (
+            STOP_ERROR + COAST + SLIP * abs(angle)
+        )
+        assert math.hypot(x - x0, y - y0) < 0.002  # in place
+
+
+MOTIONS: dict[str, Callable[[SimRobot], ActionHandle[Any]]] = {
+    "navigate_to": lambda robot: robot.navigate_to((1.0, 0.5, 0.0, 0.0, 0.0, 0.0)),
+    "rotate_angle": lambda robot: robot.rotate_angle(3.0),
+    "dock": lambda robot: robot.dock(),
+    "undock": lambda robot: robot.undock(),
+}
+
+
+@pytest.mark.asyncio
+@pytest.mark.parametrize("name", sorted(MOTIONS))
+async def test_cancelling_any_motion_stops_the_wheels_and_releases_them(name: str) -> None:
+    async with SimRobot() as robot:
+        if name != "undock":
+            await robot.undock()
+            await robot.drive_distance(0.5)
+        handle = MOTIONS[name](robot)
+        await robot.sleep(0.5)
+        assert robot.resources.owner(WHEELS) is not None
+        assert robot.world.command != (0.0, 0.0)  # moving
+        handle.cancel("stop now")
+        with pytest.raises(ActionInterrupted, match="stop now"):
+            await handle
+        assert robot.world.command == (0.0, 0.0)
+        assert robot.resources.owner(WHEELS) is None
+        await robot.sleep(0.5)
+        assert robot.state.v == pytest.approx(0.0, abs=0.005)
+        assert robot.state.w == pytest.approx(0.0, abs=0.01)
+        assert handle.outcome is Outcome.CANCELLED
 
 
 def test_lockstep_robot_under_an_ordinary_loop_says_so() -> None:

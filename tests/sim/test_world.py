@@ -407,6 +407,46 @@ def test_batching_steps_does_not_change_the_physics() -> None:
     assert batched.odom_pose() == pytest.approx(single.odom_pose(), abs=3e-4)
 
 
+@pytest.mark.parametrize("islands", [False, True], ids=["as-shipped", "with-islands"])
+def test_steps_are_plain_mujoco_steps(islands: bool) -> None:
+    # SimWorld steps cheaply (sensors only after the last step of a call, whose first step
+    # reuses the previous call's forward pass; scene.xml turns constraint islands off), yet
+    # its trajectory and readings are MuJoCo's own: mj_step, then mj_forward for sensors.
+    import mujoco
+
+    world = SimWorld()
+    world.place(1.0, 0.0, 0.0)  # weaves into the east wall: contacts, bumper, IR
+    model = mujoco.MjModel.from_xml_path(str(model_path()))
+    if islands:
+        model.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_ISLAND)
+    data = mujoco.MjData(model)
+    data.qpos[:] = world._data.qpos
+    pressed = False
+    for tick in range(300):
+        world.set_command(0.25, 0.8 * math.sin(tick / 25))
+        data.ctrl[:] = world._data.ctrl
+        world.step(1 + tick % 12)
+        mujoco.mj_step(model, data, nstep=1 + tick % 12)
+        mujoco.mj_forward(model, data)
+        assert world._data.qpos.tolist() == data.qpos.tolist()
+        assert world._data.sensordata.tolist() == data.sensordata.tolist()
+        pressed = pressed or world.read_sensors()["bumper"] is True
+    assert pressed
+
+
+def test_set_time_moves_the_clock_not_the_physics(world: SimWorld) -> None:
+    world.advance(0.1)
+    pose = world.base_pose()
+    world.set_time(5.01)
+    assert (world.time, world.steps, world.base_pose()) == (5.01, 50, pose)
+    after = world.time_after(10)
+    assert after == 5.01 + 10 * 0.002
+    world.step(10)
+    assert world.time == after
+    with pytest.raises(ValueError, match=r"^the simulation time must be a finite number, not inf$"):
+        world.set_time(math.inf)
+
+
 def test_time_counts_whole_steps(world: SimWorld) -> None:
     for _ in range(500):
         world.advance(TICK)

@@ -1,7 +1,8 @@
 """The simulator's control loop: step physics and publish sensors every control tick.
 
-Each tick is a plain loop callback (no task) scheduled with ``call_at`` at
-``start + k * period`` for integer ``k``, so lockstep time stays exact. A tick
+Each tick is a plain loop callback (no task) scheduled with ``call_at`` at the
+world's time after the tick's physics steps (``start + k * period``, computed
+from whole steps), so lockstep time stays exact and equal to the world's. A tick
 steps MuJoCo, writes every sensor to ``robot.state`` in one batch (monitors
 see each tick's values), then runs the controllers the motion actions
 registered. In lockstep the loop's virtual clock jumps from tick to tick; in
@@ -52,7 +53,6 @@ class SimBackend:
         self._robot: Robot | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._timer: asyncio.TimerHandle | None = None
-        self._t0 = 0.0
         self._controllers: dict[Callable[[], bool], asyncio.Future[None]] = {}
 
     async def start(self, robot: Robot) -> None:
@@ -66,10 +66,11 @@ class SimBackend:
             )
             raise LockstepError(msg)
         self._robot, self._loop = robot, loop
+        # The world's clock reads the loop's (the physics pauses between runs).
+        self.world.set_time(loop.time())
         robot.state.update(self.world.read_sensors())
-        self._t0 = loop.time()
         self.ticks = 0
-        self._timer = loop.call_at(self._t0 + self.period, self._tick)
+        self._schedule(loop)
 
     async def stop(self) -> None:
         """Stop the wheels and the ticking; fail whatever still waits on a controller."""
@@ -104,11 +105,14 @@ class SimBackend:
         if robot is None or loop is None:
             return
         self.ticks += 1
-        self._timer = loop.call_at(self._t0 + (self.ticks + 1) * self.period, self._tick)
         self.world.step(self.steps_per_tick)
+        self._schedule(loop)
         robot.state.update(self.world.read_sensors())
         if self._controllers:
             self._run_controllers()
+
+    def _schedule(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._timer = loop.call_at(self.world.time_after(self.steps_per_tick), self._tick)
 
     def _run_controllers(self) -> None:
         for controller, fut in list(self._controllers.items()):

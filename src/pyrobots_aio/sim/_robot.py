@@ -16,6 +16,7 @@ from ..resources import Resource
 from ..robot import Robot
 from ._backend import SimBackend
 from ._frames import WorldFrames
+from ._odometry import wrap_angle
 from ._world import SimWorld
 
 if TYPE_CHECKING:
@@ -27,17 +28,21 @@ WHEELS = Resource("wheels")
 """The drive wheels: every motion action holds them."""
 
 DISTANCE_TOLERANCE = 0.002
-"""Metres: `SimRobot.drive_distance` and `SimRobot.navigate_to` stop this close."""
+"""Metres: `SimRobot.drive_distance` and `SimRobot.navigate_to` stop at most this far off.
+
+They stop at the control tick nearest the goal, by their own measure (odometry
+for the first, the map pose for the second): closer, at their slowest speeds.
+"""
 ANGLE_TOLERANCE = 0.005
-"""Radians: `SimRobot.rotate_angle` and `SimRobot.navigate_to` stop this close."""
+"""Radians: `SimRobot.rotate_angle` and `SimRobot.navigate_to` stop at most this far off.
+
+As `DISTANCE_TOLERANCE`; odometry (`rotate_angle`) also slips from the true
+heading by about 0.05% of the turn.
+"""
 DOCK_APPROACH = (0.45, 0.0, 0.0, "dock")
 """Where `SimRobot.dock` goes before reversing onto the dock (in the dock's frame)."""
 _MIN_V, _MIN_W, _GAIN = 0.03, 0.15, 3.0
 _DOCK_SPEED, _DOCK_REVERSE_LIMIT = 0.05, 0.7
-
-
-def _wrap(angle: float) -> float:
-    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 def _checked(name: str, value: float, *, positive: bool = False) -> float:
@@ -57,6 +62,16 @@ def _ramp(remaining: float, top: float, floor: float) -> float:
 
 class SimRobot(Robot):
     """The MuJoCo simulation of a Create-3-sized robot in its arena; it starts docked.
+
+    Time: the event loop's clock is the simulation's. When the robot starts
+    (``async with robot``), the world's clock is set to the loop's time, so
+    ``robot.time()``, ``robot.world.time`` and the timestamps in
+    ``robot.state`` agree exactly at every control tick, however long the loop
+    ran before (a robot entered at loop time 5 s starts its simulation at 5 s).
+    Between runs the physics is paused: entered again later, the robot goes
+    on from where it stood, at the loop's new time (``robot.world.steps``
+    counts only the simulated steps). In real time the world's clock reads
+    each tick's scheduled time; the loop's runs on between ticks.
 
     Args:
         seed: Seeds the sensor noise: the same seed and commands give the same run.
@@ -125,10 +140,11 @@ class SimRobot(Robot):
 
         def step() -> bool:
             remaining = abs(goal) - travelled()
-            if remaining <= DISTANCE_TOLERANCE:
+            v = _ramp(remaining, top, _MIN_V)
+            if self._arrived(remaining, v, DISTANCE_TOLERANCE):
                 self.world.stop()
                 return True
-            self.world.set_command(math.copysign(_ramp(remaining, top, _MIN_V), goal), 0.0)
+            self.world.set_command(v if goal >= 0 else -v, 0.0)
             return False
 
         await self._steer(step)
@@ -145,12 +161,13 @@ class SimRobot(Robot):
         def step() -> bool:
             nonlocal turned, last
             yaw = self.world.odom_pose()[2]
-            turned, last = turned + _wrap(yaw - last), yaw
+            turned, last = turned + wrap_angle(yaw - last), yaw
             remaining = goal - turned
-            if abs(remaining) <= ANGLE_TOLERANCE:
+            w = _ramp(remaining, top, _MIN_W)
+            if self._arrived(remaining, w, ANGLE_TOLERANCE):
                 self.world.stop()
                 return True
-            self.world.set_command(0.0, _ramp(remaining, top, _MIN_W))
+            self.world.set_command(0.0, w)
             return False
 
         await self._steer(step)
@@ -173,15 +190,16 @@ class SimRobot(Robot):
             x, y, yaw = self.world.base_pose()
             dist = math.hypot(tx - x, ty - y)
             if dist > DISTANCE_TOLERANCE * 5:
-                error = _wrap(math.atan2(ty - y, tx - x) - yaw)
+                error = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
                 v = 0.0 if abs(error) > 0.3 else _ramp(dist, top, _MIN_V)
                 self.world.set_command(v, _ramp(error, 1.0, _MIN_W) if abs(error) > 0.01 else 0.0)
                 return False
-            error = _wrap(tyaw - yaw)
-            if abs(error) <= ANGLE_TOLERANCE:
+            error = wrap_angle(tyaw - yaw)
+            w = _ramp(error, 1.0, _MIN_W)
+            if self._arrived(error, w, ANGLE_TOLERANCE):
                 self.world.stop()
                 return True
-            self.world.set_command(0.0, _ramp(error, 1.0, _MIN_W))
+            self.world.set_command(0.0, w)
             return False
 
         await self._steer(step)
@@ -218,6 +236,15 @@ class SimRobot(Robot):
             return False
 
         await self._steer(step)
+
+    def _arrived(self, remaining: float, speed: float, tolerance: float) -> bool:
+        """Whether to stop now, ``remaining`` from the goal and about to go at ``speed``.
+
+        It stops at the control tick nearest the goal: within ``tolerance`` and
+        within half the way one more tick at ``speed`` would go. (Stopping at the
+        first tick within tolerance stopped short by up to the tolerance, every time.)
+        """
+        return abs(remaining) <= min(tolerance, abs(speed) * self.sim.period / 2)
 
     async def _steer(self, step: Any) -> None:
         """Run ``step`` now and after every tick until it returns True; stop the wheels after."""

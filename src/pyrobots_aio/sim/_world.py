@@ -3,18 +3,22 @@
 `SimWorld` is the only object in pyrobots_aio that touches MuJoCo's ``MjModel``
 and ``MjData``. It knows nothing of asyncio: the simulated robot calls
 `SimWorld.step` (or `SimWorld.advance`) from its control loop and publishes
-`SimWorld.read_sensors` to ``robot.state``. (The module is a little over 400
-lines because it keeps every touch of ``MjData`` in one class.)
+`SimWorld.read_sensors` to ``robot.state``. (The module is over 400 lines
+because it keeps every touch of ``MjData`` in one class; the odometry's
+arithmetic lives in ``_odometry``.)
 
 Time is an integer count of physics steps (``data.time`` accumulates rounding
-error); `SimWorld.time` is ``steps * physics_dt``. After each call to
-``step`` the sensors, poses and frames describe the state at `SimWorld.time`.
+error); `SimWorld.time` is ``steps * physics_dt`` from a start that
+`SimWorld.set_time` moves (a running simulated robot sets it to the event
+loop's clock). After each call to ``step`` the sensors, poses and frames
+describe the state at `SimWorld.time`.
 
 Determinism: MuJoCo is deterministic, and the only randomness is the IR noise
 (standard deviation ``ir_noise`` in the model, added only to readings that see
 something), drawn from a generator seeded with ``seed``. The same seed and the
 same calls give bit-identical trajectories and readings. How the steps are
-batched (``step(10)`` or ten ``step(1)``) does not change the physics; the
+batched (``step(10)`` or ten ``step(1)``) does not change the physics, nor
+does how `step` saves work (a test pins it to plain ``mj_step`` bit for bit); the
 odometry, like a robot's firmware, integrates the encoders once per call (as a
 circular arc), so it differs by micrometres.
 """
@@ -31,6 +35,7 @@ import numpy as np
 from .. import ModelLoadError, SimulationUnavailableError, UnknownFrameError
 from ._models import ModelLayout
 from ._models import model_path as _default_model_path
+from ._odometry import Odometry
 
 if TYPE_CHECKING:
     from types import ModuleType
@@ -66,10 +71,6 @@ def _load(mujoco: ModuleType, path: Path) -> Any:
         raise ModelLoadError(f"cannot load the MuJoCo model {str(path)!r}: {problem}") from err
 
 
-def _wrap_angle(angle: float) -> float:
-    return math.atan2(math.sin(angle), math.cos(angle))
-
-
 def _yaw(qw: float, qx: float, qy: float, qz: float) -> float:
     return math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
 
@@ -84,33 +85,6 @@ def _matrix(pos: NDArray[np.float64], rot: NDArray[np.float64]) -> NDArray[np.fl
     out[:3, :3] = rot.reshape(3, 3)
     out[:3, 3] = pos
     return out
-
-
-class _Odometry:
-    """Dead reckoning from the wheel encoders, as the robot's firmware does it."""
-
-    __slots__ = ("_left", "_radius", "_right", "_track", "x", "y", "yaw")
-
-    def __init__(self, radius: float, track: float, left: float, right: float) -> None:
-        self._radius, self._track = radius, track
-        self.reset(left, right)
-
-    def reset(self, left: float, right: float) -> None:
-        self.x = self.y = self.yaw = 0.0
-        self._left, self._right = left, right
-
-    def update(self, left: float, right: float) -> None:
-        d_left = (left - self._left) * self._radius
-        d_right = (right - self._right) * self._radius
-        self._left, self._right = left, right
-        distance = (d_left + d_right) / 2
-        turn = (d_right - d_left) / self._track
-        # Exact for a circular arc: the chord, along the mean heading.
-        chord = distance if abs(turn) < 1e-12 else 2 * distance / turn * math.sin(turn / 2)
-        heading = self.yaw + turn / 2
-        self.x += chord * math.cos(heading)
-        self.y += chord * math.sin(heading)
-        self.yaw = _wrap_angle(self.yaw + turn)
 
 
 class SimWorld:
@@ -147,18 +121,22 @@ class SimWorld:
         path = Path(model_path) if model_path is not None else _default_model_path()
         model = _load(mujoco, path)
         model.opt.timestep = physics_dt
+        self._sensors_off = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+        # mj_step2 integrates as mj_step does, except RK4 (it falls back to Euler).
+        self._split_step = model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4
         self._layout = ModelLayout.from_model(mujoco, model, str(path))
         self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
         self._mujoco, self._model, self._data = mujoco, model, mujoco.MjData(model)
         self._path, self._seed, self._dt = path, seed, physics_dt
+        self._readings: list[float] = []  # sensordata of the current state, as floats
         self._reset_to_home()
-        self._sensordata = self._data.sensordata  # a view: stays current after each step
         self._rng = np.random.default_rng(seed)
         self._steps = 0
+        self._clock_start = (0.0, 0)  # `time` reads this time at this step
         self._command = (0.0, 0.0)
         self._battery = 1.0
         left, right = self._encoders()
-        self._odometry = _Odometry(self._layout.wheel_radius, self._layout.track, left, right)
+        self._odometry = Odometry(self._layout.wheel_radius, self._layout.track, left, right)
         _log.debug(
             "loaded %s: %d IR and %d cliff sensors, seed %d",
             path,
@@ -192,8 +170,29 @@ class SimWorld:
 
     @property
     def time(self) -> float:
-        """Simulated seconds since construction: ``steps * physics_dt``."""
-        return self._steps * self._dt
+        """The simulation clock, in seconds: ``steps * physics_dt`` unless `set_time` moved it."""
+        return self.time_after(0)
+
+    def time_after(self, steps: int) -> float:
+        """Return what `time` will read after ``steps`` more physics steps.
+
+        Computed from whole steps, so it equals `time` exactly once they are taken.
+        """
+        start, at_step = self._clock_start
+        return start + (self._steps + steps - at_step) * self._dt
+
+    def set_time(self, now: float) -> None:
+        """Make `time` read ``now`` at the current step; it advances by `physics_dt` per step.
+
+        The physics does not change: only the clock's start moves (`steps` still
+        counts from construction).
+
+        Raises:
+            ValueError: ``now`` is not a finite number.
+        """
+        if not math.isfinite(now):
+            raise ValueError(f"the simulation time must be a finite number, not {now!r}")
+        self._clock_start = (now, self._steps)
 
     @property
     def command(self) -> tuple[float, float]:
@@ -250,13 +249,26 @@ class SimWorld:
             raise ValueError(f"cannot step a negative number of physics steps ({n})")
         if n == 0:
             return
-        self._mujoco.mj_step(self._model, self._data, nstep=n)
-        # mj_step computes sensors and poses before integrating; recompute them for
-        # the new state (this does not change the physics that follows).
-        self._mujoco.mj_forward(self._model, self._data)
+        mujoco, model, data = self._mujoco, self._model, self._data
+        # Sensors are read only after the last step: skip them in the steps (they never
+        # feed back into the physics), then compute everything once for the new state.
+        flags = model.opt.disableflags
+        model.opt.disableflags = flags | self._sensors_off
+        try:
+            rest = n
+            if self._split_step:
+                # The last `_forward` left positions and velocities computed; only the
+                # command may have changed since: mj_step2 does the rest of a step.
+                mujoco.mj_step2(model, data)
+                rest -= 1
+            if rest:
+                mujoco.mj_step(model, data, nstep=rest)
+        finally:
+            model.opt.disableflags = flags
+        self._forward()
         self._steps += n
         self._odometry.update(*self._encoders())
-        self._update_battery(n * self._dt)
+        self._update_battery(n * self._dt, self._readings)
 
     def advance(self, dt: float) -> int:
         """Advance the physics by ``dt`` seconds and return the steps taken.
@@ -292,7 +304,7 @@ class SimWorld:
         heading = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
         mujoco.mju_mulQuat(data.qpos[qpos + 3 : qpos + 7], heading, self._rest_tilt)
         data.qvel[:] = 0.0
-        self._mujoco.mj_forward(self._model, data)
+        self._forward()
         self._odometry.reset(*self._encoders())
 
     # --- sensors ---------------------------------------------------------------------
@@ -307,7 +319,7 @@ class SimWorld:
         ``encoder_left``, ``encoder_right`` (rad); ``imu_gyro_z`` (rad/s);
         ``imu_acc_x``, ``imu_acc_y`` (m/s^2, body frame); ``battery`` (0 to 1).
         """
-        layout, s = self._layout, self._sensordata.tolist()
+        layout, s = self._layout, self._readings
         left = s[layout.bumpers[0]] > layout.bumper_threshold
         right = s[layout.bumpers[1]] > layout.bumper_threshold
         state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
@@ -393,7 +405,7 @@ class SimWorld:
         key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, _HOME_KEYFRAME)
         if key >= 0:
             mujoco.mj_resetDataKeyframe(model, data, key)
-        mujoco.mj_forward(model, data)
+        self._forward()
         # How the robot rests on the floor (its height, and its tilt onto the
         # caster with the heading taken out), so that `place` puts it down settled.
         qpos = self._layout.free_qpos
@@ -403,9 +415,21 @@ class SimWorld:
         self._rest_tilt = np.empty(4)
         mujoco.mju_mulQuat(self._rest_tilt, unturn, data.qpos[qpos + 3 : qpos + 7])
 
+    def _forward(self) -> None:
+        """Compute positions, forces and every sensor for the current state; cache the readings.
+
+        First the checks `mj_step` makes before its own forward pass (a diverged
+        state is reset), since `step` reuses this pass for its first step.
+        """
+        mujoco, model, data = self._mujoco, self._model, self._data
+        mujoco.mj_checkPos(model, data)
+        mujoco.mj_checkVel(model, data)
+        mujoco.mj_forward(model, data)
+        self._readings = self._data.sensordata.tolist()
+
     def _encoders(self) -> tuple[float, float]:
         left, right = self._layout.encoders
-        return float(self._sensordata[left]), float(self._sensordata[right])
+        return self._readings[left], self._readings[right]
 
     def _docked(self, s: list[float]) -> bool:
         start = self._layout.dock_contact
@@ -413,9 +437,9 @@ class SimWorld:
         hx, hy, hz = self._layout.dock_pad
         return abs(px) <= hx and abs(py) <= hy and abs(pz) <= hz
 
-    def _update_battery(self, elapsed: float) -> None:
+    def _update_battery(self, elapsed: float, s: list[float]) -> None:
         layout = self._layout
-        if self._docked(self._sensordata.tolist()):
+        if self._docked(s):
             self._battery = min(1.0, self._battery + elapsed / layout.battery_charge_time)
         else:
             self._battery = max(0.0, self._battery - elapsed / layout.battery_runtime)
