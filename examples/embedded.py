@@ -14,8 +14,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 
 from pyrobots_aio import Robot, action
+from pyrobots_aio.cli import install_console_handler
 
 
 @action
@@ -96,4 +98,5 @@ async def main() -> list[object]:
 
 
 if __name__ == "__main__":
+    install_console_handler(logging.INFO)
     asyncio.run(main())

@@ -8,19 +8,23 @@ someone very close in front (say hello). A scripted session of 68 simulated
 minutes with randomised events drives it, in lockstep virtual time. A safety
 cap of 20 running actions is enforced, as in the paper; it reports actions and
 events per minute and how often the cap was hit (the paper: 70 actions/min on
-average, peaks at 200/min, the cap hit 31 times).
+average, peaks at 200/min, the cap hit 31 times). Whatever the cap refuses (an
+expression, a move, the bumper reflex) is counted and skipped, and the robot
+carries on.
 
-Run: ``python examples/kindergarten.py [--minutes M] [--seed N]``
+Run: ``python examples/kindergarten.py [--minutes M] [--seed N] [--cap N]``
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import logging
 import math
 import random
 from collections import Counter
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from pyrobots_aio import (
     EventKind,
@@ -29,55 +33,83 @@ from pyrobots_aio import (
     TooManyActions,
     action,
 )
+from pyrobots_aio.cli import install_console_handler
 from pyrobots_aio.sim import SimRobot, run
 from pyrobots_aio.sim.random_walk import bumper_reflex, move
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+    from pyrobots_aio import Instrument
 
 SAFETY_CAP = 20
 
 
 class PerMinute:
-    """An instrument counting spawned actions and monitor firings per simulated minute."""
+    """An instrument counting spawned actions and monitor firings per minute since ``start``."""
 
     def __init__(self) -> None:
+        self.start = 0.0
         self.actions: Counter[int] = Counter()
         self.events: Counter[int] = Counter()
 
     def on_event(self, event: ExecEvent) -> None:
+        minute = int((event.time - self.start) // 60)
         if event.kind is EventKind.ACTION_SPAWNED:
-            self.actions[int(event.time // 60)] += 1
+            self.actions[minute] += 1
         elif event.kind is EventKind.MONITOR_FIRED:
-            self.events[int(event.time // 60)] += 1
+            self.events[minute] += 1
 
 
 @dataclass
 class Session:
-    """What happened during the session."""
+    """What happened during the session.
+
+    ``reactions`` counts what the robot started in reaction (expressions by
+    name, ``back_off`` for the bumper reflex); ``refused`` what the safety cap
+    refused (the same names, and ``move`` for the wandering); ``cap_hits`` is
+    the total refused.
+    """
 
     minutes: int
     actions_per_minute: float
     peak_actions_per_minute: int
     events_per_minute: float
+    peak_events_per_minute: int
+    safety_cap: int
     cap_hits: int
     reactions: Counter[str]
+    refused: Counter[str]
 
 
 class Kid(SimRobot):
-    """The companion robot: expressions are short actions on its (pretend) face."""
+    """The companion robot: expressions are short actions on its (pretend) face.
 
-    def __init__(self, seed: int) -> None:
+    The safety cap refuses any action started while ``max_actions`` run; the
+    robot counts each refusal in ``refused`` (by what was refused) and carries
+    on without it.
+    """
+
+    def __init__(
+        self, seed: int, max_actions: int = SAFETY_CAP, instruments: Iterable[Instrument] = ()
+    ) -> None:
         self.meter = PerMinute()
-        super().__init__(seed=seed, max_actions=SAFETY_CAP, instruments=[self.meter])
-        self.cap_hits = 0
+        super().__init__(seed=seed, max_actions=max_actions, instruments=[self.meter, *instruments])
         self.reactions: Counter[str] = Counter()
+        self.refused: Counter[str] = Counter()
 
     def react(self, expression: str) -> None:
         """Start an expression, unless the safety cap is reached (then count the hit)."""
+        self.attempt(expression, express, expression)
+
+    def attempt(self, what: str, start: Callable[..., object], *args: object) -> None:
+        """Start the action ``start(self, *args)``; count it as ``what``, started or refused."""
         try:
-            express(self, expression)
+            start(self, *args)
         except TooManyActions:
-            self.cap_hits += 1
+            self.refused[what] += 1
         else:
-            self.reactions[expression] += 1
+            self.reactions[what] += 1
 
 
 @action
@@ -105,10 +137,25 @@ async def look_at_child(robot: Kid) -> None:
 
 @action
 async def wander(robot: Kid, rng: random.Random) -> None:
-    await robot.undock()
+    """Slow random moves; one the safety cap refuses (it or a step of it) is skipped."""
     while True:
-        await move(robot, rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 0.8))  # may be cut short
+        angle, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 0.8)
+        try:
+            if robot.state.docked:
+                await robot.undock()
+            await move(robot, angle, distance)  # may be cut short by the bumper reflex
+        except TooManyActions:
+            robot.refused["move"] += 1
         await robot.sleep(rng.uniform(5.0, 20.0))
+
+
+@action
+async def back_off(robot: Kid) -> None:
+    """The bumper reflex; if the safety cap refuses a step of it, count the hit and stop."""
+    try:
+        await bumper_reflex(robot)
+    except TooManyActions:
+        robot.refused["back_off"] += 1
 
 
 async def session_script(robot: Robot, minutes: int, rng: random.Random) -> None:
@@ -129,30 +176,43 @@ async def session_script(robot: Robot, minutes: int, rng: random.Random) -> None
             next_toy = now + rng.uniform(10, 60)
 
 
-async def main(minutes: int = 68, seed: int = 0) -> Session:
+async def main(
+    minutes: int = 68,
+    seed: int = 0,
+    max_actions: int = SAFETY_CAP,
+    instruments: Iterable[Instrument] = (),
+) -> Session:
+    """Run the session; ``instruments`` also receive the executive's events."""
     rng = random.Random(seed)
-    async with Kid(seed) as robot:
+    # one stream each: how long the robot's moves take does not change the children's script
+    blink_rng, walk_rng, script_rng = (random.Random(rng.getrandbits(64)) for _ in range(3))
+    async with Kid(seed, max_actions, instruments) as robot:
+        robot.meter.start = robot.time()
         robot.state.update(pacifier=True, scale=0.0, child_x=1.0, child_y=0.0)
         robot.whenever("pacifier", becomes=False).do(robot.react, "cry")
         robot.whenever("pacifier", becomes=True).do(robot.react, "thank")
         robot.whenever("scale", increase=0.5).do(robot.react, "giggle")
-        robot.whenever("bumper", becomes=True).do(bumper_reflex)
+        robot.whenever("bumper", becomes=True).do(robot.attempt, "back_off", back_off)
         robot.whenever("ir_front_center_left", below=0.15, max_firing_freq=0.2).do(
             robot.react, "hello"
         )
-        background = [blink(robot, rng), look_at_child(robot), wander(robot, rng)]
-        await session_script(robot, minutes, rng)
+        background = [blink(robot, blink_rng), look_at_child(robot), wander(robot, walk_rng)]
+        await session_script(robot, minutes, script_rng)
         for handle in background:
             handle.cancel("the session is over")
         await asyncio.gather(*(h.wait_done() for h in background))
-        per_minute = [robot.meter.actions[m] for m in range(minutes)]
+        actions = [robot.meter.actions[m] for m in range(minutes)]
+        events = [robot.meter.events[m] for m in range(minutes)]
         return Session(
             minutes=minutes,
-            actions_per_minute=sum(per_minute) / minutes,
-            peak_actions_per_minute=max(per_minute),
-            events_per_minute=sum(robot.meter.events.values()) / minutes,
-            cap_hits=robot.cap_hits,
+            actions_per_minute=sum(actions) / minutes,
+            peak_actions_per_minute=max(actions),
+            events_per_minute=sum(events) / minutes,
+            peak_events_per_minute=max(events),
+            safety_cap=max_actions,
+            cap_hits=robot.refused.total(),
             reactions=robot.reactions,
+            refused=robot.refused,
         )
 
 
@@ -160,11 +220,16 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--minutes", type=int, default=68)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--cap", type=int, default=SAFETY_CAP, help="the safety cap (max_actions)")
     options = parser.parse_args()
-    result = run(main, options.minutes, options.seed)
+    install_console_handler(logging.WARNING)  # INFO would log each of the session's bumps
+    result = run(main, options.minutes, options.seed, options.cap)
     print(f"{result.minutes} simulated minutes")
     peak = result.peak_actions_per_minute
     print(f"actions per minute: {result.actions_per_minute:.0f} (peak {peak})")
-    print(f"events per minute:  {result.events_per_minute:.1f}")
-    print(f"safety cap of {SAFETY_CAP} actions hit {result.cap_hits} times")
-    print(f"reactions: {dict(result.reactions)}")
+    print(
+        f"events per minute:  {result.events_per_minute:.1f} (peak {result.peak_events_per_minute})"
+    )
+    print(f"safety cap of {result.safety_cap} actions hit {result.cap_hits} times")
+    print(f"started: {dict(result.reactions)}")
+    print(f"refused: {dict(result.refused)}")

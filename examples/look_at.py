@@ -11,9 +11,11 @@ Run: ``python examples/look_at.py``
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 
 from pyrobots_aio import FrameTree, PoseLike, Robot, action
+from pyrobots_aio.cli import install_console_handler
 
 PAN_SPEED = math.radians(90)  # rad/s, the head's top speed
 
@@ -56,4 +58,5 @@ async def main() -> tuple[float, float, float, float]:
 
 
 if __name__ == "__main__":
+    install_console_handler(logging.INFO)
     asyncio.run(main())

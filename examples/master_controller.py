@@ -12,8 +12,16 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from typing import TYPE_CHECKING
 
 from pyrobots_aio import ActionInterrupted, Robot, action
+from pyrobots_aio.actions import current_action
+from pyrobots_aio.cli import install_console_handler
+
+if TYPE_CHECKING:
+    from collections.abc import Awaitable, Callable, Iterable
+
+    from pyrobots_aio import Instrument
 
 RETRIES = 4
 BACKOFF = 0.1  # seconds before the first retry; doubled each time
@@ -26,10 +34,15 @@ log = logging.getLogger("master_controller")
 class Humanoid(Robot):
     """A pretend humanoid: its steps only take time; ``lift`` fails twice, then works."""
 
-    def __init__(self) -> None:
-        super().__init__(dummy=True)
+    def __init__(self, instruments: Iterable[Instrument] = ()) -> None:
+        super().__init__(dummy=True, instruments=instruments)
         self.lift_attempts = 0
         self.report: list[str] = []
+
+    def note(self, line: str) -> None:
+        """Add a line to the report (and log it, with the time and the action)."""
+        self.report.append(line)
+        log.info("%s", line)
 
     @action
     async def grasp_cup(self) -> str:
@@ -59,17 +72,18 @@ class Humanoid(Robot):
 @action
 async def run_step(robot: Humanoid, step: str) -> str:
     """Run one plan step, retrying a failure with exponential backoff."""
+    attempt: Callable[[], Awaitable[str]] = getattr(robot, step)
     delay = BACKOFF
     for _ in range(RETRIES - 1):
         try:
-            return await getattr(robot, step)()
+            return await attempt()
         except ActionInterrupted:
             raise
         except Exception as error:
-            robot.report.append(f"{step} failed ({error}); retrying in {delay:.1f} s")
+            robot.note(f"{step} failed ({error}); retrying in {delay:.1f} s")
             await robot.sleep(delay)
             delay *= 2
-    return await getattr(robot, step)()  # the last attempt: its failure is the step's
+    return await attempt()  # the last attempt: its failure is the step's
 
 
 @action
@@ -80,9 +94,9 @@ async def execute_plan(robot: Humanoid, plan: list[str]) -> list[str]:
         try:
             done.append(await run_step(robot, step))
         except ActionInterrupted as stop:
-            robot.report.append(f"plan stopped during {step}: {stop.reason}")
+            robot.note(f"plan stopped during {step}: {stop.reason}")
             break
-        robot.report.append(f"{step}: {done[-1]}")
+        robot.note(f"{step}: {done[-1]}")
     return done
 
 
@@ -97,9 +111,7 @@ async def health_monitor(robot: Humanoid, period: float = 0.5) -> None:
         healthy = rate >= MIN_RATE
         if healthy != robot.state.camera_ok:
             robot.state.camera_ok = healthy
-            robot.report.append(
-                f"camera stream {'recovered' if healthy else 'degraded'}: {rate:.0f} Hz"
-            )
+            robot.note(f"camera stream {'recovered' if healthy else 'degraded'}: {rate:.0f} Hz")
 
 
 @action
@@ -107,8 +119,16 @@ async def emergency_stop(robot: Humanoid) -> None:
     """Cancel everything else, cut the motors, return to the safe pose."""
     robot.state.motors = False
     await robot.cancel_all_others("emergency stop")
-    robot.report.append("e-stop: everything cancelled, motors off")
-    robot.report.append(await robot.go_to_safe_pose())
+    me = current_action.get()
+    robot.note(f"e-stop: {status(robot, but=me.id if me else None)}")
+    robot.note(await robot.go_to_safe_pose())
+
+
+def status(robot: Humanoid, but: int | None = None) -> str:
+    """What still runs (leaving out action ``but``) and whether the motors are on."""
+    running = ", ".join(f"{i.name}#{i.id}" for i in robot.running() if i.id != but)
+    actions = f"still running: {running}" if running else "nothing running"
+    return f"{actions}, motors {'on' if robot.state.motors else 'off'}"
 
 
 async def camera(robot: Humanoid, degrade_at: float) -> None:
@@ -120,8 +140,8 @@ async def camera(robot: Humanoid, degrade_at: float) -> None:
         await asyncio.sleep(1 / rate)
 
 
-async def main() -> list[str]:
-    async with Humanoid() as robot:
+async def main(instruments: Iterable[Instrument] = ()) -> list[str]:
+    async with Humanoid(instruments) as robot:
         robot.state.update(camera=0.0, camera_ok=True, motors=True, estop=False, pose="home")
         driver = asyncio.create_task(camera(robot, degrade_at=1.5))
         robot.on("estop", becomes=True).do(emergency_stop)
@@ -132,17 +152,14 @@ async def main() -> list[str]:
         try:
             await plan
         except ActionInterrupted as stop:
-            robot.report.append(f"plan interrupted: {stop.reason}")
+            robot.note(f"plan interrupted: {stop.reason}")
         await robot.sleep(1.0)
         driver.cancel()
         await asyncio.gather(driver, return_exceptions=True)
-        robot.report.append(
-            f"pose {robot.state.pose}, motors {'on' if robot.state.motors else 'off'}"
-        )
+        robot.note(f"pose {robot.state.pose}, {status(robot)}")
         return robot.report
 
 
 if __name__ == "__main__":
-    logging.basicConfig(level=logging.INFO)
-    for line in asyncio.run(main()):
-        print(line)
+    install_console_handler(logging.INFO)
+    asyncio.run(main())

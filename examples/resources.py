@@ -11,6 +11,7 @@ Run: ``python examples/resources.py``
 from __future__ import annotations
 
 import asyncio
+import logging
 
 from pyrobots_aio import (
     ActionInterrupted,
@@ -22,6 +23,7 @@ from pyrobots_aio import (
     action,
     lock,
 )
+from pyrobots_aio.cli import install_console_handler
 
 L_ARM, R_ARM = Resource("l_arm"), Resource("r_arm")
 ARMS = CompoundResource(L_ARM, R_ARM, name="arms")
@@ -80,5 +82,6 @@ async def main() -> dict[str, Outcome]:
 
 
 if __name__ == "__main__":
+    install_console_handler(logging.INFO)
     for name, outcome in asyncio.run(main()).items():
         print(f"{name:18} {outcome.name}")

@@ -11,8 +11,17 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from typing import TYPE_CHECKING
 
 from pyrobots_aio import ActionCancelled, ActionInterrupted, Outcome, Robot, action
+from pyrobots_aio.cli import install_console_handler
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from pyrobots_aio import Instrument
+
+log = logging.getLogger("safe_walk")
 
 
 class Walker(Robot):
@@ -20,12 +29,12 @@ class Walker(Robot):
 
     @action
     async def walk(self, speed: float) -> None:
-        logging.info("walking at %.1f m/s", speed)
+        log.info("walking at %.1f m/s", speed)
         await self.sleep(3600)
 
     @action
     async def go_back_to_rest_pose(self) -> str:
-        logging.info("going back to the rest pose")
+        log.info("going back to the rest pose")
         await self.sleep(0.2)
         return "rest"
 
@@ -39,8 +48,12 @@ async def safe_walk(robot: Walker, speed: float = 0.2) -> None:
         raise
 
 
-async def main() -> Outcome:
-    async with Walker() as robot:
+async def main(instruments: Iterable[Instrument] = ()) -> Outcome:
+    """Start ``safe_walk``, cancel it after a second; return its outcome.
+
+    ``instruments`` receive the executive's events (a test checks the cleanup with them).
+    """
+    async with Walker(instruments=instruments) as robot:
         handle = safe_walk(robot, 0.3)
         await robot.sleep(1.0)
         print(robot.action_tree())
@@ -53,6 +66,6 @@ async def main() -> Outcome:
 
 
 if __name__ == "__main__":
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(message)s")
+    install_console_handler(logging.INFO)
     outcome = asyncio.run(main())
     print(f"outcome: {outcome.name}")

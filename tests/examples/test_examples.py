@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import ast
 import importlib.util
 import math
 import sys
@@ -8,7 +9,8 @@ from types import ModuleType
 
 import pytest
 
-from pyrobots_aio import Outcome
+from pyrobots_aio import EventKind, Outcome
+from pyrobots_aio.testing import EventLog
 
 EXAMPLES = Path(__file__).parent.parent.parent / "examples"
 
@@ -24,10 +26,43 @@ def load_example(name: str) -> ModuleType:
     return module
 
 
+def main_block_calls(name: str) -> list[str]:
+    """The names of the functions ``examples/<name>.py`` calls in its ``__main__`` block."""
+    tree = ast.parse((EXAMPLES / f"{name}.py").read_text())
+    blocks = [
+        node
+        for node in tree.body
+        if isinstance(node, ast.If) and "__main__" in ast.unparse(node.test)
+    ]
+    assert len(blocks) == 1, f"examples/{name}.py needs one 'if __name__ == \"__main__\":' block"
+    calls = (n for n in ast.walk(blocks[0]) if isinstance(n, ast.Call))
+    return [ast.unparse(call.func) for call in calls]
+
+
+@pytest.mark.parametrize(
+    "name", sorted(p.stem for p in EXAMPLES.glob("*.py") if p.stem != "run_all")
+)
+def test_example_installs_the_console_handler(name: str) -> None:
+    calls = main_block_calls(name)
+    assert "install_console_handler" in calls
+    assert "logging.basicConfig" not in calls
+
+
 @pytest.mark.asyncio
 @pytest.mark.virtual_time
-async def test_safe_walk() -> None:
-    assert await load_example("safe_walk").main() is Outcome.CANCELLED
+async def test_safe_walk_awaits_its_cleanup_before_it_is_done() -> None:
+    log = EventLog()
+    assert await load_example("safe_walk").main(instruments=[log]) is Outcome.CANCELLED
+    stop = log.first(EventKind.CANCEL_REQUESTED, "safe_walk").time
+    finished = [(e.name, e.data["outcome"], e.time) for e in log.of_kind(EventKind.ACTION_FINISHED)]
+    # the rest pose (0.2 s) ran to completion, then safe_walk finished, re-raising the cancellation
+    assert finished == [
+        ("walk", "cancelled", stop),
+        ("go_back_to_rest_pose", "succeeded", pytest.approx(stop + 0.2)),
+        ("safe_walk", "cancelled", pytest.approx(stop + 0.2)),
+    ]
+    rest = log.first(EventKind.ACTION_SPAWNED, "go_back_to_rest_pose")
+    assert rest.data["parent"] == log.first(EventKind.ACTION_SPAWNED, "safe_walk").action
 
 
 @pytest.mark.asyncio
@@ -65,7 +100,8 @@ async def test_embedded() -> None:
 @pytest.mark.asyncio
 @pytest.mark.virtual_time
 async def test_master_controller() -> None:
-    report = await load_example("master_controller").main()
+    log = EventLog()
+    report = await load_example("master_controller").main(instruments=[log])
     assert report == [
         "grasp_cup: cup grasped",
         "lift failed (arm controller timeout (attempt 1)); retrying in 0.1 s",
@@ -73,10 +109,20 @@ async def test_master_controller() -> None:
         "lift: cup lifted",
         "camera stream degraded: 6 Hz",
         "plan interrupted: emergency stop",
-        "e-stop: everything cancelled, motors off",
+        "e-stop: nothing running, motors off",
         "safe pose",
-        "pose safe, motors off",
+        "pose safe, nothing running, motors off",
     ]
+    events = log.events
+    estop = events.index(log.first(EventKind.ACTION_SPAWNED, "emergency_stop"))
+    safe_pose = events.index(log.first(EventKind.ACTION_STARTED, "go_to_safe_pose"))
+    spawned = {e.action for e in events[:estop] if e.kind is EventKind.ACTION_SPAWNED}
+    ended = {e.action for e in events[:safe_pose] if e.kind is EventKind.ACTION_FINISHED}
+    # every action started before the e-stop, health monitor included, ended before the safe pose
+    assert ended == spawned
+    assert log.outcomes("health_monitor") == ["cancelled"]
+    spawned_since = [e.name for e in events[estop:] if e.kind is EventKind.ACTION_SPAWNED]
+    assert spawned_since == ["emergency_stop", "go_to_safe_pose"]
 
 
 @pytest.mark.asyncio
@@ -94,9 +140,31 @@ async def test_random_walk_completes_with_every_bump_handled() -> None:
 async def test_kindergarten_session() -> None:
     session = await load_example("kindergarten").main(minutes=5, seed=1)
     assert session.minutes == 5
-    assert 5 * 60 <= session.reactions["look"] <= 5 * 60 + 1  # one per second of the session
+    assert session.reactions["look"] == 5 * 60  # one per second of the session
     assert session.reactions["blink"] > 5 * 60 / 6
     assert session.reactions["giggle"] > 0
     assert session.reactions["cry"] + session.reactions["thank"] > 0
-    assert session.actions_per_minute > 60
+    # every monitor firing (an event) started exactly one reaction
+    monitored = ("cry", "thank", "giggle", "hello", "back_off")
+    assert session.events_per_minute * 5 == sum(session.reactions[r] for r in monitored)
+    # pinned for seed 1: the robot's moves (so the bumper and IR events) come from the simulator
+    assert (session.actions_per_minute, session.peak_actions_per_minute) == (100.0, 118)
+    assert (session.events_per_minute, session.peak_events_per_minute) == (8.0, 18)
     assert session.cap_hits == 0
+    assert session.refused == {}
+
+
+@pytest.mark.asyncio
+@pytest.mark.virtual_time
+async def test_kindergarten_safety_cap_refuses_and_counts() -> None:
+    session = await load_example("kindergarten").main(minutes=2, seed=1, max_actions=3)
+    # blink, look_at_child and wander fill the three slots for the whole session, so every
+    # other start is refused: each look (one a second for 120 s), each blink, each of wander's
+    # moves (it cannot even undock, so the bumper and the IR sensors never fire) and each
+    # reaction of the toy and pacifier monitors (14 squeezes, the pacifier taken once)
+    assert session.refused == {"look": 120, "blink": 33, "move": 11, "giggle": 14, "cry": 1}
+    assert session.cap_hits == 179
+    assert session.reactions == {}
+    assert session.events_per_minute * 2 == session.refused["giggle"] + session.refused["cry"]
+    assert (session.actions_per_minute, session.peak_actions_per_minute) == (1.5, 3)
+    assert (session.events_per_minute, session.peak_events_per_minute) == (7.5, 12)
