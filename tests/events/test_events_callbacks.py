@@ -37,6 +37,11 @@ async def pressing(robot: Robot) -> None:
     await robot.sleep(3600)
 
 
+@action
+async def long_walk(robot: Robot) -> None:
+    await robot.sleep(10)
+
+
 class Greeter(Robot):
     @action
     async def wave(self, *args: Any) -> None:
@@ -269,10 +274,6 @@ async def test_close_cancels_a_running_coroutine_callback_and_waits_for_its_clea
 
 @pytest.mark.asyncio
 async def test_close_cancels_a_running_action_callback() -> None:
-    @action
-    async def long_walk(robot: Robot) -> None:
-        await robot.sleep(10)
-
     log = EventLog()
     async with Robot(instruments=[log]) as robot:
         robot.state.button = False
@@ -290,10 +291,6 @@ async def test_close_cancels_a_running_action_callback() -> None:
 async def test_a_plain_function_that_starts_an_action_is_blocked_and_closed_by_its_monitor() -> (
     None
 ):
-    @action
-    async def long_walk(robot: Robot) -> None:
-        await robot.sleep(10)
-
     log = EventLog()
     async with Robot(instruments=[log]) as robot:
         robot.state.button = False
@@ -376,10 +373,6 @@ async def test_leaving_the_robot_cancels_callbacks_and_monitors() -> None:
         except ActionCancelled:
             cancelled.append("slow")
             raise
-
-    @action
-    async def long_walk(robot: Robot) -> None:
-        await robot.sleep(10)
 
     async with Robot() as robot:
         robot.state.button = False

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import functools
+import inspect
+from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
 import pytest
 
@@ -19,6 +22,11 @@ from pyrobots_aio import (
 from pyrobots_aio.actions import current_action, lock
 from pyrobots_aio.resources import CompoundResource, Resource
 
+if TYPE_CHECKING:
+    from collections.abc import Callable, Coroutine
+
+P = ParamSpec("P")
+T = TypeVar("T")
 L_ARM, R_ARM = Resource("l_arm"), Resource("r_arm")
 ARMS = CompoundResource(L_ARM, R_ARM, name="arms")
 WHEELS = Resource("wheels")
@@ -100,7 +108,8 @@ async def test_held_and_awaiting_show_in_introspection() -> None:
         assert wave.state is ActionState.WAITING
         line = robot.action_tree().splitlines()[1]
         assert line.startswith(f"wave_hand#{wave.id} waiting waits for l_arm at ")
-        assert line.endswith("test_resources_lock.py:45")  # where wave_hand is defined
+        defined_at = inspect.getsourcelines(wave_hand.fn)[1]  # its first decorator's line
+        assert line.endswith(f"test_resources_lock.py:{defined_at}")  # where it is defined
         robot.gate.set()
         await wave
         assert wave.held == ()
@@ -559,3 +568,61 @@ async def test_a_skipped_child_fails_its_parent_and_keeps_its_own_handle() -> No
         assert error.handle.outcome is Outcome.SKIPPED
         assert error.holder is lift
         robot.gate.set()
+
+
+# -- @lock under a user decorator: held until done if ``__wrapped__`` is kept --------
+
+
+def passthrough(fn: Callable[P, Coroutine[Any, Any, T]]) -> Callable[P, Coroutine[Any, Any, T]]:
+    """A user decorator that keeps ``__wrapped__`` (functools.wraps)."""
+
+    @functools.wraps(fn)
+    async def wrapper(*args: P.args, **kwargs: P.kwargs) -> T:
+        return await fn(*args, **kwargs)
+
+    return wrapper
+
+
+def opaque(fn: Callable[P, Coroutine[Any, Any, T]]) -> Callable[P, Coroutine[Any, Any, T]]:
+    """A user decorator that hides what it wraps (no functools.wraps)."""
+
+    async def opaque_wrapper(*args: P.args, **kwargs: P.kwargs) -> T:
+        return await fn(*args, **kwargs)
+
+    return opaque_wrapper
+
+
+@action
+@passthrough
+@lock(WHEELS)
+async def decorated_parent(robot: Robot, stopped: list[object]) -> None:
+    unlocked_child(robot, stopped)
+    await asyncio.sleep(0)
+
+
+@action
+@opaque
+@lock(WHEELS)
+async def hidden_parent(robot: Robot, stopped: list[object]) -> None:
+    unlocked_child(robot, stopped)
+    await asyncio.sleep(0)
+
+
+@pytest.mark.asyncio
+async def test_a_wrapping_decorator_between_action_and_lock_still_holds_until_done() -> None:
+    stopped: list[object] = []
+    async with Robot() as robot:
+        parent = decorated_parent(robot, stopped)
+        await parent
+        assert stopped == [parent]
+        assert robot.resources.owner(WHEELS) is None
+
+
+@pytest.mark.asyncio
+async def test_a_decorator_hiding_the_lock_makes_it_hold_for_the_call_only() -> None:
+    """The documented limit: without ``__wrapped__`` the lock is held like a helper's."""
+    stopped: list[object] = []
+    async with Robot() as robot:
+        await hidden_parent(robot, stopped)
+        assert stopped == [None]
+        assert robot.resources.owner(WHEELS) is None
