@@ -23,9 +23,10 @@ def lint(session: nox.Session) -> None:
 
 @nox.session
 def typecheck(session: nox.Session) -> None:
-    """mypy --strict over the library."""
+    """mypy --strict over the library, then over the typing checks of its public API."""
     session.install("mypy>=1.10", "-e", INSTALL)
     session.run("mypy", "--strict", "src")
+    session.run("mypy", "--strict", "tests/typing")
 
 
 @nox.session

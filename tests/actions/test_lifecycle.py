@@ -3,6 +3,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import types
+from collections.abc import Callable
 
 import pytest
 
@@ -10,6 +11,7 @@ from pyrobots_aio import (
     ActionCancelled,
     ActionDefinitionError,
     ActionError,
+    ActionHandle,
     ActionState,
     EventKind,
     ExecEvent,
@@ -67,6 +69,113 @@ async def test_cancel_grace_warns_with_location_then_abandons(
     assert messages[0][1].endswith("; cancelling it again")
     assert messages[1][0] == logging.ERROR
     assert messages[1][1].startswith(f"action deaf#{handle.id} ignored cancellation for 4 s, at ")
+
+
+@action
+async def slow_to_stop(robot: Robot, cleanup: float, log: list[tuple[str, float]]) -> None:
+    try:
+        await robot.sleep(3600)
+    except ActionCancelled:
+        await robot.sleep(cleanup)
+        log.append(("action cleaned up", robot.time()))
+        raise
+
+
+@pytest.mark.asyncio
+async def test_cancel_grace_cancels_a_slow_cleanup_again(caplog: pytest.LogCaptureFixture) -> None:
+    """A cleanup that outlasts the grace is cancelled again at the grace, not abandoned later."""
+    log: list[tuple[str, float]] = []
+    async with Robot(cancel_grace=2.0) as robot:
+        handle = slow_to_stop(robot, 10.0, log)
+        await robot.sleep(0.5)
+        handle.cancel("stop")
+        assert await handle.wait_done() is Outcome.CANCELLED
+        assert handle.finished_at == 0.5 + 2.0
+        assert handle.cancel_reason == "stop"
+    assert log == []  # the cleanup's sleep was interrupted by the second cancellation
+    assert [r.levelno for r in caplog.records if r.name.startswith("pyrobots_aio")] == [
+        logging.WARNING
+    ]
+
+
+@pytest.mark.asyncio
+async def test_no_watchdog_timer_outlives_the_robot(caplog: pytest.LogCaptureFixture) -> None:
+    """Cancelling again re-arms the watchdog once: no stray timer fires after the robot stopped."""
+    async with Robot(cancel_grace=2.0) as robot:
+        handle = slow_to_stop(robot, 10.0, [])
+        await robot.sleep(0.5)
+        handle.cancel("stop")
+        await handle.wait_done()
+    await asyncio.sleep(10)  # past every deadline the watchdog ever had
+    assert [(r.name, r.levelno) for r in caplog.records if r.levelno >= logging.WARNING] == [
+        ("pyrobots_aio.actions", logging.WARNING)
+    ]
+
+
+async def _cancel_during_shutdown(
+    robot: Robot, start: Callable[[Robot], object], cancel_at: float
+) -> float:
+    """Run ``robot`` (``start`` it, leave at 0.5 s), cancel its task at ``cancel_at``: took."""
+
+    async def main() -> None:
+        async with robot:
+            start(robot)
+            await robot.sleep(0.5)
+
+    loop = asyncio.get_running_loop()
+    t0 = loop.time()
+    task = asyncio.create_task(main())
+    await asyncio.sleep(cancel_at)
+    assert robot.is_running  # still shutting down
+    task.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await task
+    assert task.cancelled()
+    assert not robot.is_running
+    assert robot.handles() == []
+    return loop.time() - t0
+
+
+@pytest.mark.asyncio
+async def test_cancelling_the_robot_task_during_shutdown_still_completes_it() -> None:
+    log: list[tuple[str, float]] = []
+    handles: list[ActionHandle[None]] = []
+    robot = Robot()
+    took = await _cancel_during_shutdown(
+        robot, lambda robot: handles.append(slow_to_stop(robot, 1.0, log)), cancel_at=0.8
+    )
+    assert took == 1.5  # the action's whole 1 s cleanup, not cut short, not waited for beyond
+    assert log == [("action cleaned up", 1.5)]
+    (handle,) = handles
+    assert handle.outcome is Outcome.CANCELLED
+    assert handle.cancel_reason == "robot shutting down"
+
+
+@pytest.mark.asyncio
+async def test_cancelling_the_robot_task_while_monitors_stop_still_stops_actions() -> None:
+    """Monitors stop first (their callback's cleanup takes 0.2 s), then actions (1 s)."""
+    log: list[tuple[str, float]] = []
+    handles: list[ActionHandle[None]] = []
+
+    async def callback(robot: Robot) -> None:
+        try:
+            await robot.sleep(3600)
+        except asyncio.CancelledError:
+            await robot.sleep(0.2)
+            log.append(("callback cleaned up", robot.time()))
+            raise
+
+    def start(robot: Robot) -> None:
+        robot.state.go = False
+        robot.whenever("go", becomes=True).do(callback, robot)
+        robot.state.go = True
+        handles.append(slow_to_stop(robot, 1.0, log))
+
+    robot = Robot()
+    took = await _cancel_during_shutdown(robot, start, cancel_at=0.6)
+    assert log == [("callback cleaned up", 0.7), ("action cleaned up", 1.7)]
+    assert took == 1.7
+    assert handles[0].outcome is Outcome.CANCELLED
 
 
 @pytest.mark.asyncio
@@ -262,18 +371,17 @@ class Recorder:
 async def test_instruments_see_every_action_event() -> None:
     recorder = Recorder()
     async with Robot(instruments=[recorder]) as robot:
+        t0 = robot.time()
         handle = forever(robot)
         await robot.sleep(1)
         handle.cancel("bored")
         await handle.wait_done()
-    kinds = [(e.kind, e.time) for e in recorder.events]
-    assert kinds == [
-        (EventKind.ACTION_SPAWNED, pytest.approx(0.0, abs=1e9)),
-        (EventKind.ACTION_STARTED, kinds[1][1]),
-        (EventKind.CANCEL_REQUESTED, kinds[2][1]),
-        (EventKind.ACTION_FINISHED, kinds[3][1]),
+    assert [(e.kind, e.time - t0) for e in recorder.events] == [
+        (EventKind.ACTION_SPAWNED, 0.0),
+        (EventKind.ACTION_STARTED, 0.0),
+        (EventKind.CANCEL_REQUESTED, 1.0),
+        (EventKind.ACTION_FINISHED, 1.0),
     ]
-    assert kinds[2][1] - kinds[1][1] == pytest.approx(1.0)
     assert recorder.events[2].data == {"reason": "bored", "by": None}
     assert recorder.events[3].data == {"outcome": "cancelled", "error": None}
     assert {e.action for e in recorder.events} == {handle.id}

@@ -103,6 +103,34 @@ async def test_children_and_parents() -> None:
 
 
 @pytest.mark.asyncio
+async def test_childof_is_true_only_for_ancestors() -> None:
+    @action
+    async def tree(robot: Robot, depth: int, width: int) -> None:
+        for _ in range(width):
+            if depth:
+                tree(robot, depth - 1, width)
+        await robot.sleep(3600)
+
+    async with Robot() as robot:
+        first, second = tree(robot, 2, 2), tree(robot, 1, 1)
+        await robot.sleep(1)
+        left, right = first.children
+        (grandchild, _) = left.children
+        (other,) = second.children
+        assert grandchild.childof(left)
+        assert grandchild.childof(first)
+        assert left.childof(first)
+        assert not left.childof(right)  # siblings
+        assert not right.childof(left)
+        assert not grandchild.childof(right)  # a cousin's child
+        assert not other.childof(first)  # has a parent, but an unrelated one
+        assert not grandchild.childof(second)
+        assert not grandchild.childof(grandchild)
+        assert not first.childof(grandchild)
+        await robot.cancel_all()
+
+
+@pytest.mark.asyncio
 async def test_parent_is_done_only_after_its_children() -> None:
     order = []
 
@@ -131,14 +159,20 @@ async def test_parent_is_done_only_after_its_children() -> None:
 
 @pytest.mark.asyncio
 async def test_cancelling_a_parent_cancels_its_whole_subtree() -> None:
-    cleaned = []
+    """Every descendant is cancelled at once with the canceller's reason, not reaped later."""
+    cleaned: list[tuple[str, float]] = []
+    cleanup = {"top": 0.05, "middle": 0.0, "child": 0.2, "grandchild": 0.1}
+
+    async def clean_up(robot: Robot, name: str) -> None:
+        cleaned.append((name, robot.time()))
+        await robot.sleep(cleanup[name])
 
     @action
     async def leaf(robot: Robot, name: str) -> None:
         try:
             await robot.sleep(3600)
         except ActionCancelled:
-            cleaned.append(name)
+            await clean_up(robot, name)
             raise
 
     @action
@@ -147,21 +181,54 @@ async def test_cancelling_a_parent_cancels_its_whole_subtree() -> None:
         try:
             await robot.sleep(3600)
         except ActionCancelled:
-            cleaned.append("middle")
+            await clean_up(robot, "middle")
             raise
 
     @action
     async def top(robot: Robot) -> None:
         middle(robot)
-        await leaf(robot, "child")
+        try:
+            await leaf(robot, "child")
+        except ActionCancelled:
+            await clean_up(robot, "top")
+            raise
 
     async with Robot() as robot:
         handle = top(robot)
         await robot.sleep(1)
-        assert len(robot.running()) == 4
+        t_cancel = robot.time()
+        subtree = dict(zip(["top", "middle", "child", "grandchild"], robot.handles(), strict=True))
+        assert [(h.name, h.parent) for h in subtree.values()] == [
+            ("top", None),
+            ("middle", handle),
+            ("leaf", handle),
+            ("leaf", subtree["middle"]),
+        ]
+        done: list[str] = []
+        for name, h in subtree.items():
+            h.add_done_callback(lambda name=name: done.append(name))
         handle.cancel("abort")
         assert await handle.wait_done() is Outcome.CANCELLED
-        assert sorted(cleaned) == ["child", "grandchild", "middle"]
+        assert sorted(cleaned, key=lambda c: c[0]) == [
+            ("child", t_cancel),
+            ("grandchild", t_cancel),
+            ("middle", t_cancel),
+            ("top", t_cancel),
+        ]
+        assert {name: h.cancel_reason for name, h in subtree.items()} == dict.fromkeys(
+            subtree, "abort"
+        )
+        assert all(h.outcome is Outcome.CANCELLED for h in subtree.values())
+        # Descendants are done before their ancestors; a parent waits for its children's cleanup.
+        assert done == ["grandchild", "middle", "child", "top"]
+        assert {name: h.finished_at for name, h in subtree.items()} == pytest.approx(
+            {
+                "top": t_cancel + 0.2,
+                "middle": t_cancel + 0.1,
+                "child": t_cancel + 0.2,
+                "grandchild": t_cancel + 0.1,
+            }
+        )
         assert robot.running() == []
 
 
@@ -260,3 +327,45 @@ async def test_cleanup_started_after_cancel_runs_normally() -> None:
         handle.cancel()
         await handle.wait_done()
         assert results == ["rest"]
+
+
+@pytest.mark.asyncio
+async def test_a_parent_waiting_for_its_slow_cleanup_child_is_not_abandoned(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The cleanup child is itself cancelled at the parent's grace and re-cancelled at its own.
+
+    The parent is not ignoring cancellation, it waits for a child that is bounded: it is
+    done when the child is, never before (and never abandoned, nor its task left behind).
+    """
+
+    @action
+    async def rest(robot: Robot) -> None:
+        try:
+            await robot.sleep(5)
+        except ActionCancelled:
+            await robot.sleep(3)
+            raise
+
+    @action
+    async def walk(robot: Robot) -> None:
+        try:
+            await robot.sleep(3600)
+        except ActionCancelled:
+            await rest(robot)
+            raise
+
+    async with Robot(cancel_grace=2.0) as robot:
+        handle = walk(robot)
+        await robot.sleep(1)
+        handle.cancel("stop")
+        await robot.sleep(0.5)
+        (child,) = handle.children
+        assert await handle.wait_done() is Outcome.CANCELLED
+        assert child.done()
+        assert child.cancel_reason == "the task awaiting it was cancelled"
+        assert (handle.finished_at, child.finished_at) == (1 + 2 + 2, 1 + 2 + 2)
+    assert [r.levelno for r in caplog.records if r.name.startswith("pyrobots_aio")] == [
+        logging.WARNING,  # walk cancelled again at 3 s
+        logging.WARNING,  # rest cancelled again at 5 s
+    ]

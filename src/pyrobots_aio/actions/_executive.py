@@ -19,7 +19,7 @@ import anyio
 from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
-from ._handle import ActionHandle, Outcome, drive
+from ._handle import ActionHandle, ActionState, Outcome, drive
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
@@ -260,10 +260,14 @@ class Executive:
             _, stage, handle = watch.popleft()
             if not handle.done():
                 self._overdue(handle, stage)
-        if watch:
+        if watch and self._watch_timer is None:  # `_overdue` may have armed it already
             self._watch_timer = loop.call_at(watch[0][0], self._watchdog)
 
     def _overdue(self, handle: ActionHandle[Any], stage: int) -> None:
+        if handle.state is ActionState.FINISHING:
+            # Its body is over: it only waits for its cancelled children, each of
+            # which the watchdog bounds on its own (abandoning it would orphan them).
+            return
         where = handle.location() or "an unknown place"
         if stage == _ESCALATE:
             _log.warning(
