@@ -9,10 +9,12 @@ from __future__ import annotations
 import asyncio
 import gc
 import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
-from pyrobots_aio import ActionCancelled, Robot, action
+from pyrobots_aio import ActionCancelled, ActionHandle, Robot, action
 
 THROUGHPUT_N = 20_000
 LATENCY_N = 2_000
@@ -119,32 +121,49 @@ async def _cancel_latency(robot: Robot) -> dict[str, float]:
 
 
 async def _memory(robot: Robot) -> dict[str, float]:
-    gc.collect()
-    before = _rss_bytes()
+    """RSS per sleeper, each kind in a fresh interpreter (a freed heap would be reused)."""
     handles = [sleeper(robot) for _ in range(SLEEPERS)]
     await asyncio.sleep(0.01)
-    gc.collect()
-    per_action = (_rss_bytes() - before) / SLEEPERS
     start = time.perf_counter()
     await robot.cancel_all("bench")
     cancel_s = time.perf_counter() - start
     assert all(h.done() for h in handles)
-    del handles
-    gc.collect()
-    before = _rss_bytes()
-    tasks = [asyncio.create_task(bare_sleeper()) for _ in range(SLEEPERS)]
-    await asyncio.sleep(0.01)
-    gc.collect()
-    per_task = (_rss_bytes() - before) / SLEEPERS
-    for task in tasks:
-        task.cancel()
-    await asyncio.gather(*tasks, return_exceptions=True)
     return {
         "concurrent_sleeping_actions": float(SLEEPERS),
-        "rss_per_sleeping_action_kib": per_action / 1024,
-        "rss_per_bare_task_kib": per_task / 1024,
+        "rss_per_sleeping_action_kib": _rss_in_fresh_process("action") / 1024,
+        "rss_per_bare_task_kib": _rss_in_fresh_process("bare") / 1024,
         f"cancel_all_{SLEEPERS}_s": cancel_s,
     }
+
+
+def _rss_in_fresh_process(kind: str) -> float:
+    """Bytes of RSS per sleeping ``kind`` ("action" or "bare"), measured in a new interpreter."""
+    done = subprocess.run(
+        [sys.executable, "-m", "tests.bench.bench_actions", "rss", kind],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return float(done.stdout)
+
+
+async def _rss_per_sleeper(kind: str) -> float:
+    async with Robot() as robot:
+        gc.collect()
+        before = _rss_bytes()
+        if kind == "action":
+            sleepers: list[ActionHandle[None] | asyncio.Task[None]] = [
+                sleeper(robot) for _ in range(SLEEPERS)
+            ]
+        else:
+            sleepers = [asyncio.create_task(bare_sleeper()) for _ in range(SLEEPERS)]
+        await asyncio.sleep(0.01)
+        gc.collect()
+        per_sleeper = (_rss_bytes() - before) / SLEEPERS
+        for one in sleepers:
+            one.cancel()
+        await asyncio.sleep(0.01)
+    return per_sleeper
 
 
 async def _cancel_all(robot: Robot) -> dict[str, float]:
@@ -187,3 +206,7 @@ async def _main() -> dict[str, float]:
 def run() -> dict[str, float]:
     """Measure the executive; return the figures."""
     return asyncio.run(_main())
+
+
+if __name__ == "__main__":  # python -m tests.bench.bench_actions rss action|bare
+    print(asyncio.run(_rss_per_sleeper(sys.argv[2])))
