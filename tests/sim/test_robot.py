@@ -248,6 +248,16 @@ def test_realtime_robot_follows_the_wall_clock() -> None:
 def test_bad_arguments_are_rejected() -> None:
     with pytest.raises(ValueError, match=r"control_rate 33 Hz is not a whole number"):
         SimRobot(control_rate=33)
+    for rate in (0, -50, math.inf, "50"):
+        with pytest.raises(ValueError, match="control_rate must be") as info:
+            SimRobot(control_rate=rate)  # type: ignore[arg-type]
+        assert str(info.value) == (
+            f"control_rate must be a positive number of ticks per second, got {rate!r}"
+        )
+    for seed in ("x", -1, 1.5, True):
+        with pytest.raises(ValueError, match="seed must be") as info:
+            SimRobot(seed=seed)  # type: ignore[arg-type]
+        assert str(info.value) == f"seed must be a non-negative integer, not {seed!r}"
     robot = SimRobot()
     with pytest.raises(ValueError, match=r"v must be a finite number, got nan"):
         robot.drive(math.nan, 0.0)

@@ -115,6 +115,8 @@ class SimWorld:
     def __init__(
         self, model_path: str | Path | None = None, *, seed: int = 0, physics_dt: float = 0.002
     ) -> None:
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, not {seed!r}")
         if not (math.isfinite(physics_dt) and physics_dt > 0):
             raise ValueError(f"physics_dt must be a positive number of seconds, not {physics_dt!r}")
         mujoco = _import_mujoco()
