@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import logging
-import traceback
+import asyncio
+import gc
 
 import pytest
 
@@ -12,7 +12,7 @@ from pyrobots_aio.actions import current_action
 
 pytestmark = [pytest.mark.asyncio, pytest.mark.virtual_time]
 
-UNRETRIEVED = "failed and nobody is waiting for it"
+UNRETRIEVED = "failed and nobody retrieved its error:"
 
 
 @action
@@ -34,8 +34,21 @@ async def boom_knowing_itself(robot: Robot) -> None:
     raise RuntimeError(f"{me!r} broke")
 
 
-def _reports(caplog: pytest.LogCaptureFixture) -> list[logging.LogRecord]:
-    return [r for r in caplog.records if UNRETRIEVED in r.getMessage()]
+@action
+async def waits_for_its_child(robot: Robot) -> None:
+    await quick(robot)  # cancelled by someone else: its ActionInterrupted escapes
+
+
+@action
+async def wraps_interruption(robot: Robot) -> None:
+    try:
+        await quick(robot)
+    except ActionInterrupted as stop:
+        raise RuntimeError("gave up") from stop
+
+
+def _reports(caplog: pytest.LogCaptureFixture) -> list[str]:
+    return [r.getMessage() for r in caplog.records if UNRETRIEVED in r.getMessage()]
 
 
 async def test_a_failure_retrieved_later_is_never_reported(
@@ -47,6 +60,7 @@ async def test_a_failure_retrieved_later_is_never_reported(
         with pytest.raises(RuntimeError, match="servo unplugged"):
             await second
         del first, second
+    gc.collect()
     assert _reports(caplog) == []
 
 
@@ -59,26 +73,67 @@ async def test_a_forgotten_failure_is_reported_when_its_handle_goes(
         assert handle.done()
         assert _reports(caplog) == []  # somebody may still retrieve it
         del handle  # ... now nobody can: reported at once, no garbage collection needed
-        (record,) = _reports(caplog)
-    assert record.getMessage() == f"action boom#1 {UNRETRIEVED}"
-    assert record.levelno == logging.ERROR
-    assert record.exc_info is not None
-    error = record.exc_info[1]
-    assert isinstance(error, RuntimeError)
-    frames = traceback.extract_tb(error.__traceback__)
-    assert [f.name for f in frames] == ["boom"]  # starts in the action's own code
-    assert frames[0].line == 'raise RuntimeError("servo unplugged")'
+        (report,) = _reports(caplog)
+    lines = report.splitlines()
+    assert lines[0] == f"action boom#1 {UNRETRIEVED}"
+    assert lines[1] == "Traceback (most recent call last):"
+    assert "in boom" in lines[2]  # it starts in the action's own code
+    assert lines[3].strip() == 'raise RuntimeError("servo unplugged")'
+    assert lines[-1] == "RuntimeError: servo unplugged"
 
 
-async def test_a_failure_whose_frame_refers_to_its_own_handle_is_still_reported(
+async def test_failures_whose_errors_refer_to_handles_are_reported_by_the_collector(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
+    """Cycles (a frame holding its own handle, a child's interruption) wait for the collector."""
     async with Robot() as robot:
         boom_knowing_itself(robot)
+        waits_for_its_child(robot)
+        wraps_interruption(robot)
+        await robot.sleep(0.1)
+        for child in [h for h in robot.handles() if h.name == "quick"]:
+            child.cancel("enough")  # the error of its parent will refer to it, and so back
+        del child
         await robot.sleep(1.0)
-        assert [r.getMessage() for r in _reports(caplog)] == [
-            f"action boom_knowing_itself#1 {UNRETRIEVED}"
-        ]
+    gc.collect()
+    firsts = sorted(report.splitlines()[0] for report in _reports(caplog))
+    assert firsts == [
+        f"action boom_knowing_itself#1 {UNRETRIEVED}",
+        f"action waits_for_its_child#2 {UNRETRIEVED}",
+        f"action wraps_interruption#3 {UNRETRIEVED}",
+    ]
+
+
+async def test_reporting_a_failure_leaves_the_coroutines_in_its_traceback_alone() -> None:
+    """A service still running appears in the traceback; it must keep running."""
+    requests: asyncio.Queue[asyncio.Future[None]] = asyncio.Queue()
+
+    async def service() -> None:
+        while True:
+            reply = await requests.get()
+            try:
+                raise ConnectionError("arm controller offline")
+            except ConnectionError as error:
+                reply.set_exception(error)  # the traceback holds this suspended frame
+
+    @action
+    async def ask(robot: Robot) -> None:
+        reply = asyncio.get_running_loop().create_future()
+        requests.put_nowait(reply)
+        await reply
+
+    server = asyncio.create_task(service())
+    async with Robot() as robot:
+        ask(robot)  # forgotten: its failure is reported
+        await robot.sleep(0.1)
+        assert not server.done()
+        again = asyncio.get_running_loop().create_future()
+        requests.put_nowait(again)
+        with pytest.raises(ConnectionError):
+            await again
+    server.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await server
 
 
 async def test_exception_and_wait_done_retrieve_the_failure(
@@ -90,6 +145,7 @@ async def test_exception_and_wait_done_retrieve_the_failure(
         assert isinstance(checked.exception(), RuntimeError)
         assert await observed.wait_done() is Outcome.FAILED
         del checked, observed
+    gc.collect()
     assert _reports(caplog) == []
 
 

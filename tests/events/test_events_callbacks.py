@@ -192,10 +192,11 @@ async def test_a_failing_action_callback_is_logged_by_the_executive(
             await robot.sleep(0.1)
         assert monitor.firings == 2
     records = [r for r in caplog.records if r.name.startswith("pyrobots_aio")]
-    assert [r.getMessage() for r in records] == [
-        "action broken#1 failed and nobody is waiting for it",
-        "action broken#2 failed and nobody is waiting for it",
+    assert [r.getMessage().splitlines()[0] for r in records] == [
+        "action broken#1 failed and nobody retrieved its error:",
+        "action broken#2 failed and nobody retrieved its error:",
     ]
+    assert all(r.getMessage().endswith("OSError: servo unplugged") for r in records)
 
 
 @pytest.mark.asyncio

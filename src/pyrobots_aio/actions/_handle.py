@@ -1,9 +1,11 @@
 """ActionHandle: one running action, its outcome, and the task that drives it.
 
-The task runs `_drive`, which wraps the user's coroutine: it records the
+The task runs `drive`, which wraps the user's coroutine: it records the
 outcome, cancels and awaits the children still running when the body ends, runs
 the finalizers (resource release) and only then marks the handle done. The task
 itself always ends normally, so nothing leaks as "exception never retrieved".
+(Over 400 lines: the handle and the task that drives it are one state machine,
+kept in one place.)
 """
 
 from __future__ import annotations
@@ -346,13 +348,13 @@ class ActionHandle(Generic[T]):
         """Log the failure once this handle is forgotten, unless its error was retrieved.
 
         Like asyncio's "exception was never retrieved": a handle kept and awaited
-        later is not reported. The traceback keeps its lines but not the finished
-        frames' locals, so nothing in it keeps this handle alive.
+        later is not reported. The report is written now and the finalizer holds
+        only its text: the error may refer back to this handle (a child's
+        ActionInterrupted, a traceback's frames), which would keep it alive.
         """
         error = self._error
-        if error is not None and error.__traceback__ is not None:
-            traceback.clear_frames(error.__traceback__)
-        self._unretrieved = weakref.finalize(self, _report_failure, self.name, self.id, error)
+        report = "".join(traceback.format_exception(error)).rstrip() if error is not None else ""
+        self._unretrieved = weakref.finalize(self, _report_failure, self.name, self.id, report)
 
     def _retrieved(self) -> None:
         if self._unretrieved is not None:
@@ -435,5 +437,5 @@ def _without_this_frame(error: BaseException) -> TracebackType | None:
     return tb.tb_next if tb is not None else None
 
 
-def _report_failure(name: str, ident: int, error: BaseException | None) -> None:
-    _log.error("action %s#%d failed and nobody is waiting for it", name, ident, exc_info=error)
+def _report_failure(name: str, ident: int, report: str) -> None:
+    _log.error("action %s#%d failed and nobody retrieved its error:\n%s", name, ident, report)
