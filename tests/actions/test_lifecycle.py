@@ -22,6 +22,7 @@ from pyrobots_aio import (
     TooManyActions,
     action,
 )
+from pyrobots_aio.testing import EventLog
 
 pytestmark = pytest.mark.virtual_time
 
@@ -409,3 +410,26 @@ async def test_an_action_waiting_for_a_lock_reports_where_it_is_defined() -> Non
         assert info.location.endswith(f"test_lifecycle.py:{line}")
         await first
         await second
+
+
+@pytest.mark.asyncio
+async def test_the_watchdog_keeps_each_deadline_when_cancellations_overlap() -> None:
+    release = asyncio.Event()
+    log = EventLog()
+    try:
+        async with Robot(cancel_grace=2.0, instruments=[log]) as robot:
+            t0 = robot.time()
+            first, second = deaf(robot, release), deaf(robot, release)
+            await robot.sleep(1.0)
+            first.cancel("first")
+            await robot.sleep(1.0)
+            second.cancel("second")
+            await first.wait_done()
+            await second.wait_done()
+    finally:
+        release.set()
+        await asyncio.sleep(0)
+    escalated = [(e.action, e.time - t0) for e in log.of_kind(EventKind.CANCEL_ESCALATED)]
+    abandoned = [(e.action, e.time - t0) for e in log.of_kind(EventKind.ACTION_ABANDONED)]
+    assert escalated == [(first.id, 3.0), (second.id, 4.0)]
+    assert abandoned == [(first.id, 5.0), (second.id, 6.0)]

@@ -3,8 +3,11 @@
 One `Executive` per robot. Running actions are kept in a dict by id (for
 introspection and ``max_actions``) and, at the top, in the robot's root scope.
 Cancellation is bounded by a watchdog: `cancel_grace` after a cancellation an
-action still running is cancelled again with a warning; after a second grace it
-is abandoned (reported as an ERROR) so that shutdown always completes.
+action whose body still runs is cancelled again with a warning; after a second
+grace it is abandoned (reported as an ERROR) so that shutdown always completes.
+An action whose body has ended only waits for its cancelled children, each
+watched on its own: a subtree takes at most two graces a level (a cleanup that
+starts a child adds a level), never forever.
 """
 
 from __future__ import annotations
@@ -74,7 +77,7 @@ class Executive:
         self._loop = loop
 
     async def close(self, reason: str) -> None:
-        """Cancel every action and wait, bounded by two graces, even if cancelled meanwhile.
+        """Cancel every action and wait, bounded by the watchdog, even if cancelled meanwhile.
 
         From here on no new root action starts (`spawn` says the robot is shutting
         down); children, such as those a cleanup starts, still do.
@@ -246,10 +249,9 @@ class Executive:
 
     def _watch_later(self, handle: ActionHandle[Any], stage: int) -> None:
         loop = self.loop
-        deadline = loop.time() + self.cancel_grace
-        self._watch.append((deadline, stage, handle))
-        if self._watch_timer is None:
-            self._watch_timer = loop.call_at(deadline, self._watchdog)
+        self._watch.append((loop.time() + self.cancel_grace, stage, handle))
+        if self._watch_timer is None:  # due at the earliest deadline, not at this one
+            self._watch_timer = loop.call_at(self._watch[0][0], self._watchdog)
 
     def _watchdog(self) -> None:
         self._watch_timer = None
