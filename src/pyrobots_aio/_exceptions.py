@@ -6,6 +6,7 @@ the bad value and say how to fix it.
 ```
 PyRobotsError
 ├── RobotNotRunningError          an action or monitor used with no running robot
+├── EventLoopError                used from another thread, event loop or async library
 ├── ActionError
 │   ├── ActionInterrupted         awaited action was cancelled (.reason, .by, .handle)
 │   ├── ActionSkipped             action did not run: a resource was busy
@@ -50,6 +51,15 @@ class PyRobotsError(Exception):
 
 class RobotNotRunningError(PyRobotsError):
     """An action or monitor was used while its robot is not running."""
+
+
+class EventLoopError(PyRobotsError, RuntimeError):
+    """The robot was used from a thread, event loop or async library it does not run on.
+
+    A robot belongs to the asyncio event loop that runs ``async with robot``;
+    the message names the way in from elsewhere (``robot.call_soon_threadsafe``,
+    ``robot.run_threadsafe``, ``anyio.from_thread.run``).
+    """
 
 
 class ActionError(PyRobotsError):

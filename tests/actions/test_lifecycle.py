@@ -343,23 +343,6 @@ async def sleep(robot: Robot) -> None:
     await robot.sleep(1)
 
 
-def test_log_level_helpers() -> None:
-    robot = Robot()
-    logger = logging.getLogger("pyrobots_aio")
-    old = logger.level
-    try:
-        robot.debug()
-        assert logger.level == logging.DEBUG
-        robot.info()
-        assert logger.level == logging.INFO
-        robot.silent()
-        assert logger.level > logging.CRITICAL
-        robot.loglevel("WARNING")
-        assert logger.level == logging.WARNING
-    finally:
-        logger.setLevel(old)
-
-
 class Recorder:
     def __init__(self) -> None:
         self.events: list[ExecEvent] = []

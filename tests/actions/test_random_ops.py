@@ -144,9 +144,10 @@ def bodies(depth: int) -> st.SearchStrategy[Body]:
 
 
 DEPTH, GRACE = 3, 2.0
-# A cleanup child is cancelled at most a grace after its parent (when the parent is cancelled
-# again) and the deepest cleanup is cut at its grace: an action is done DEPTH + 1 graces at most
-# after its cancellation, even one that swallows it or starts an action in its cleanup.
+# A cleanup child is cut at most a grace after its parent's first cancel (with the parent's body,
+# cancelled again, or on its own once that body is over) and the deepest cleanup is cut at its
+# grace: an action is done DEPTH + 1 graces at most after its cancellation, even one that swallows
+# it or starts an action in its cleanup.
 SHUTDOWN_BOUND = (DEPTH + 1) * GRACE
 programs = st.lists(
     weighted(
@@ -187,7 +188,7 @@ class World:
         handle = perform(self.robot, body, self)
         self.handles.append(handle)
         self.by_id[handle.id] = handle
-        handle.add_done_callback(lambda: self.finished(handle))
+        handle.add_done_callback(self.finished)
         return handle
 
     def finished(self, handle: ActionHandle[int]) -> None:
@@ -207,11 +208,14 @@ class World:
         return self.handles[index % len(self.handles)] if self.handles else None
 
     def expect_cancelled(self, targets: list[ActionHandle[int]], reason: str) -> None:
-        """Each live, not yet cancelled action of the targets' subtrees gets this reason."""
+        """Each live action of the targets' subtrees gets this reason, but cleanup is spared.
+
+        A second cancel never kills cleanup (DESIGN §11): the cancellation stops at
+        actions already cancelled, so what they started since runs on.
+        """
         by = current_action.get()
         for h in self.handles:
-            in_tree = any(h is t or h.childof(t) for t in targets)
-            if in_tree and not h.done() and not h.cancel_requested:
+            if not h.done() and any(reached(h, t) for t in targets):
                 self.expected.setdefault(h.id, (reason, None if by is None else by.id))
 
     def cancel(self, target: ActionHandle[int], reason: str) -> None:
@@ -248,7 +252,7 @@ class World:
         spared = {me, *(h for h in self.handles if me.childof(h))}
         live = [h for h in self.handles if not h.done() and h not in spared]
         reason = f"others cancelled by #{me.id}"
-        self.expect_cancelled(live, reason)
+        self.expect_cancelled(outermost(live, spared), reason)
         try:
             await self.robot.cancel_all_others(reason)
         except asyncio.CancelledError:
@@ -301,6 +305,25 @@ async def perform(robot: Robot, body: Body, world: World) -> int:
     return int(me.id)
 
 
+def outermost(
+    live: list[ActionHandle[int]], spared: set[ActionHandle[int]]
+) -> list[ActionHandle[int]]:
+    """What cancel_all cancels: the live actions whose parent is None or spared."""
+    return [h for h in live if h.parent is None or h.parent in spared]
+
+
+def reached(handle: ActionHandle[int], target: ActionHandle[int]) -> bool:
+    """Whether cancelling ``target`` cancels ``handle``: in its subtree, none cancelled between."""
+    node: ActionHandle[Any] | None = handle
+    while node is not None:
+        if node.cancel_requested:
+            return False
+        if node is target:
+            return True
+        node = node.parent
+    return False
+
+
 async def run(world: World, program: list[Start | Sleep | CancelOne | Await | CancelAll]) -> None:
     """The driver: run ``program`` from outside any action, checking the registry after each op."""
     robot = world.robot
@@ -317,12 +340,13 @@ async def run(world: World, program: list[Start | Sleep | CancelOne | Await | Ca
                     await wait_for(world, target, op.timeout)
             elif isinstance(op, CancelAll):
                 live = [h for h in world.handles if not h.done()]
-                world.expect_cancelled(live, f"driver op {number}")
+                world.expect_cancelled(outermost(live, set()), f"driver op {number}")
                 await robot.cancel_all(f"driver op {number}")
                 if robot.handles():
                     world.breaches.append(f"cancel_all left {robot.handles()!r} running")
             world.check_registry(f"after op {number}")
-        world.expect_cancelled([h for h in world.handles if not h.done()], "robot shutting down")
+        live = [h for h in world.handles if not h.done()]
+        world.expect_cancelled(outermost(live, set()), "robot shutting down")
         exit_at = robot.time()
     took = asyncio.get_running_loop().time() - exit_at
     if took > SHUTDOWN_BOUND:

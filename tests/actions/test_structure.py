@@ -206,7 +206,7 @@ async def test_cancelling_a_parent_cancels_its_whole_subtree() -> None:
         ]
         done: list[str] = []
         for name, h in subtree.items():
-            h.add_done_callback(lambda name=name: done.append(name))
+            h.add_done_callback(lambda _h, name=name: done.append(name))
         handle.cancel("abort")
         assert await handle.wait_done() is Outcome.CANCELLED
         assert sorted(cleaned, key=lambda c: c[0]) == [

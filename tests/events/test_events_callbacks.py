@@ -18,6 +18,7 @@ from pyrobots_aio import (
     action,
 )
 from pyrobots_aio.actions import ActionHandle, current_action
+from pyrobots_aio.events._callbacks import QUIET_PERIOD
 from pyrobots_aio.testing import EventLog
 
 pytestmark = pytest.mark.virtual_time
@@ -165,14 +166,47 @@ async def test_a_failing_callback_is_logged_and_the_monitor_goes_on(
             await robot.sleep(0.1)
     assert calls == ["plain", "coroutine"] * 2
     records = [r for r in caplog.records if r.name == "pyrobots_aio.events"]
+    prefix = "callback test_a_failing_callback_is_logged_and_the_monitor_goes_on.<locals>"
+    # The second failures come within the quiet period: counted, and told at shutdown.
     assert [r.getMessage() for r in records] == [
-        "callback test_a_failing_callback_is_logged_and_the_monitor_goes_on.<locals>.plain "
-        "of monitor 'bumper becomes=True' failed",
-        "callback test_a_failing_callback_is_logged_and_the_monitor_goes_on.<locals>.coroutine "
-        "of monitor 'bumper becomes=True' failed",
-    ] * 2
-    assert [type(r.exc_info[1]) for r in records if r.exc_info] == [ValueError, RuntimeError] * 2
+        f"{prefix}.plain of monitor 'bumper becomes=True' failed",
+        f"{prefix}.coroutine of monitor 'bumper becomes=True' failed",
+        f"{prefix}.plain of monitor 'bumper becomes=True' failed 1 more times since the last "
+        "report (tracebacks not shown)",
+        f"{prefix}.coroutine of monitor 'bumper becomes=True' failed 1 more times since the "
+        "last report (tracebacks not shown)",
+    ]
+    assert [type(r.exc_info[1]) for r in records if r.exc_info] == [ValueError, RuntimeError]
     assert all(r.levelno == logging.ERROR for r in records)
+
+
+@pytest.mark.asyncio
+async def test_a_callback_failing_a_thousand_times_logs_one_traceback_and_a_count(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    def broken() -> None:
+        raise ValueError("broken")
+
+    async with Robot() as robot:
+        robot.state.bumper = False
+        robot.whenever("bumper", becomes=True).do(broken)
+        for _ in range(1000):
+            robot.state.bumper = True
+            robot.state.bumper = False
+            await robot.sleep(0.005)  # 5 s in all: within one quiet period
+        await robot.sleep(QUIET_PERIOD)
+        robot.state.bumper = True  # after the quiet period: logged again, with the count
+        await robot.sleep(0)
+    records = [r for r in caplog.records if r.name == "pyrobots_aio.events"]
+    name = (
+        "callback test_a_callback_failing_a_thousand_times_logs_one_traceback_and_a_count."
+        "<locals>.broken of monitor 'bumper becomes=True' failed"
+    )
+    assert [r.getMessage() for r in records] == [
+        name,
+        f"{name} (and 999 more times since the last report, not shown)",
+    ]
+    assert all(r.exc_info is not None for r in records)
 
 
 @pytest.mark.asyncio

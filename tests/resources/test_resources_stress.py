@@ -192,8 +192,9 @@ async def run_program(ops: list[Spawn | Cancel | Tick]) -> None:
             for _ in range(op.ticks if isinstance(op, Tick) else 1):
                 await asyncio.sleep(0)
             check_consistent(robot.resources)
-        async with asyncio.timeout(10):
-            await robot._executive.wait_all(handles)
+        if handles:
+            async with asyncio.timeout(10):
+                await asyncio.wait(handles)  # handles work with asyncio.wait
         assert ex.idle()
         manager = robot.resources
         assert repr(manager) == "<ResourceManager idle>"

@@ -13,13 +13,14 @@ starts a child adds a level), never forever.
 from __future__ import annotations
 
 import asyncio
-import logging
+import threading
 from collections import deque
 from typing import TYPE_CHECKING, Any, TypeVar
 
-import anyio
-
 from .._core._instrument import EventKind, ExecEvent, Instruments
+from .._core._logging import LogScope
+from .._core._loops import current_loop, wrong_loop
+from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
 from ._handle import ActionHandle, ActionState, Outcome, drive
@@ -28,7 +29,6 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
 
 T = TypeVar("T")
-_log = logging.getLogger("pyrobots_aio.actions")
 
 _ESCALATE, _ABANDON = 1, 2
 
@@ -43,13 +43,17 @@ class Executive:
         max_actions: int | None = None,
         cancel_grace: float = 2.0,
         instruments: Instruments | None = None,
+        log: LogScope | None = None,
     ) -> None:
         _check_options(max_actions, cancel_grace)
         self.owner = owner
         self.max_actions = max_actions
         self.cancel_grace = float(cancel_grace)
         self.instruments = instruments if instruments is not None else Instruments()
+        self.log_scope = log if log is not None else LogScope()
+        self.log = self.log_scope.logger("pyrobots_aio.actions")
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread = ""
         self._running: dict[int, ActionHandle[Any]] = {}
         self._roots: dict[ActionHandle[Any], None] = {}
         self._next_id = 1
@@ -73,34 +77,45 @@ class Executive:
         return self._loop is not None
 
     def open(self, loop: asyncio.AbstractEventLoop) -> None:
-        """Start accepting actions on ``loop``."""
+        """Start accepting actions on ``loop`` (the running loop, in this thread)."""
         self._loop = loop
+        self._thread = threading.current_thread().name
+
+    def check_loop(self, what: str) -> asyncio.AbstractEventLoop:
+        """The robot's loop; `EventLoopError` if the caller is on another thread or loop."""
+        loop = self.loop
+        if current_loop() is not loop:
+            raise wrong_loop(what, loop, self._thread)
+        return loop
 
     async def close(self, reason: str) -> None:
         """Cancel every action and wait, bounded by the watchdog, even if cancelled meanwhile.
 
         From here on no new root action starts (`spawn` says the robot is shutting
-        down); children, such as those a cleanup starts, still do.
+        down); children, such as those a cleanup starts, still do. A cancellation
+        of the calling task is held until every action is done, then re-raised.
         """
         self._closing = True
         roots = list(self._roots)
         for handle in roots:
+            if handle._forgotten():
+                self.log.warning(
+                    "action %s#%d is cancelled by the robot's exit before it ever ran, and "
+                    "nothing waits for it: a missing 'await'? (await the handle before "
+                    "leaving 'async with robot:')",
+                    handle.name,
+                    handle.id,
+                )
             handle.cancel(reason)
-        interrupted: BaseException | None = None
-        while any(not h.done() for h in roots):
-            try:
-                with anyio.CancelScope(shield=True):
-                    await self.wait_all(roots)
-            except asyncio.CancelledError as exc:  # finish the bounded shutdown, then re-raise
-                interrupted = exc
-        if self._watch_timer is not None:
-            self._watch_timer.cancel()
-            self._watch_timer = None
-        self._watch.clear()
-        self._loop = None
-        self._closing = False
-        if interrupted is not None:
-            raise interrupted
+        try:
+            await wait_shielded(self.all_done(roots))
+        finally:
+            if self._watch_timer is not None:
+                self._watch_timer.cancel()
+                self._watch_timer = None
+            self._watch.clear()
+            self._loop = None
+            self._closing = False
 
     # -- starting ---------------------------------------------------------
 
@@ -119,6 +134,8 @@ class Executive:
                 "start it inside 'async with robot:'"
             )
             raise RobotNotRunningError(msg)
+        if current_loop() is not loop:
+            raise wrong_loop(f"start action {name!r}", loop, self._thread)
         if self.max_actions is not None and len(self._running) >= self.max_actions:
             raise TooManyActions(name, self.max_actions, list(self._running.values()))
         parent = current_action.get()
@@ -172,13 +189,18 @@ class Executive:
     def cancel_tree(
         self, handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
     ) -> None:
-        """Cancel ``handle`` and every descendant it has now, recording who and why."""
+        """Cancel ``handle`` and every descendant it has now, recording who and why.
+
+        An action already cancelled is passed over with its subtree: what it
+        started since its cancellation is its cleanup, which a second cancel
+        never cuts short (the watchdog bounds it, counted from the first).
+        """
         stack = [handle]
         while stack:
             node = stack.pop()
-            stack.extend(node._children)
             if node._cancel_requested or node.done():
                 continue
+            stack.extend(node._children)
             node._cancel_requested = True
             node._cancel_reason = reason
             node._cancel_by = by
@@ -205,7 +227,7 @@ class Executive:
         targets = self._outermost_except(spared)
         for handle in targets:
             handle.cancel(reason)
-        await self.wait_all(targets)
+        await self.all_done(targets)
 
     def _outermost_except(self, spared: set[ActionHandle[Any]]) -> list[ActionHandle[Any]]:
         """The highest actions not spared: roots, or children of spared ancestors."""
@@ -220,30 +242,26 @@ class Executive:
         return found
 
     async def reap_children(self, handle: ActionHandle[Any]) -> None:
-        """Cancel the children still running when ``handle``'s body ended; wait for them."""
+        """Wait for the children still running when ``handle``'s body ended.
+
+        They are cancelled first, unless ``handle`` was itself cancelled: then
+        its children of that time are cancelled already, and those its cleanup
+        started run to their end (the watchdog bounds them).
+        """
         while handle._children:
             children = list(handle._children)
-            for child in children:
-                child.cancel(f"its parent {handle.name}#{handle.id} finished")
-            await self.wait_all(children)
+            if not handle._cancel_requested:
+                for child in children:
+                    child.cancel(f"its parent {handle.name}#{handle.id} finished")
+            await self.all_done(children)
 
-    async def wait_all(self, handles: Iterable[ActionHandle[Any]]) -> None:
-        """Wait until every handle is done (cancelling this wait does not cancel them)."""
+    def all_done(self, handles: Iterable[ActionHandle[Any]]) -> asyncio.Future[None]:
+        """A future done once every handle is (awaiting it never cancels them)."""
         pending = [h for h in handles if not h.done()]
-        if not pending:
-            return
-        fut = self.loop.create_future()
-        left = len(pending)
-
-        def one_done() -> None:
-            nonlocal left
-            left -= 1
-            if left == 0 and not fut.done():
-                fut.set_result(None)
-
+        countdown = Countdown(self.loop, len(pending))
         for handle in pending:
-            handle.add_done_callback(one_done)
-        await fut
+            handle._on_done(countdown.tick)
+        return countdown.future
 
     # -- the watchdog -----------------------------------------------------
 
@@ -266,13 +284,18 @@ class Executive:
             self._watch_timer = loop.call_at(watch[0][0], self._watchdog)
 
     def _overdue(self, handle: ActionHandle[Any], stage: int) -> None:
-        if handle.state is ActionState.FINISHING:
-            # Its body is over: it only waits for its cancelled children, each of
-            # which the watchdog bounds on its own (abandoning it would orphan them).
+        finishing = handle.state is ActionState.FINISHING
+        if finishing or stage == _ABANDON:
+            # A body still running is cancelled again below, and with it the cleanup
+            # it awaits; what it started and did not await is cut once it is over.
+            self._cut_cleanup(handle, stage * self.cancel_grace, warn=finishing)
+        if finishing:
+            # Its body is over: it only waits for its children, each of which the
+            # watchdog bounds on its own (abandoning it would orphan them).
             return
         where = handle.location() or "an unknown place"
         if stage == _ESCALATE:
-            _log.warning(
+            self.log.warning(
                 "action %s#%d still running %.3g s after cancellation, at %s; cancelling it again",
                 handle.name,
                 handle.id,
@@ -284,7 +307,7 @@ class Executive:
             if self.instruments:
                 self._emit(EventKind.CANCEL_ESCALATED, handle, location=where)
             return
-        _log.error(
+        self.log.error(
             "action %s#%d ignored cancellation for %.3g s, at %s; abandoning it (its task may "
             "outlive the robot)",
             handle.name,
@@ -296,6 +319,31 @@ class Executive:
             self._emit(EventKind.ACTION_ABANDONED, handle, location=where)
         handle._settle(Outcome.CANCELLED, error=handle._interrupted())
         handle._complete()
+
+    def _cut_cleanup(self, handle: ActionHandle[Any], elapsed: float, *, warn: bool) -> None:
+        """Cancel the cleanup actions ``handle`` started that outlast its grace.
+
+        With ``warn`` False (its body still runs, and the warning about it says
+        where), they are cancelled without a warning of their own.
+        """
+        late = [child for child in handle._children if not child._cancel_requested]
+        for child in late:
+            if not warn:
+                child.cancel(f"cleanup of {handle.name}#{handle.id} ran past cancel_grace")
+                continue
+            self.log.warning(
+                "cleanup action %s#%d of %s#%d still running %.3g s after %s#%d was cancelled, "
+                "at %s; cancelling it",
+                child.name,
+                child.id,
+                handle.name,
+                handle.id,
+                elapsed,
+                handle.name,
+                handle.id,
+                child.location() or "an unknown place",
+            )
+            child.cancel(f"cleanup of {handle.name}#{handle.id} ran past cancel_grace")
 
     # -- introspection ----------------------------------------------------
 

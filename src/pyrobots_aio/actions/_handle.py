@@ -4,6 +4,8 @@ The task runs `drive`, which wraps the user's coroutine: it records the
 outcome, cancels and awaits the children still running when the body ends, runs
 the finalizers (resource release) and only then marks the handle done. The task
 itself always ends normally, so nothing leaks as "exception never retrieved".
+A handle works with ``asyncio.wait``, ``asyncio.gather`` and
+``asyncio.as_completed`` as a future does: done-callbacks receive the handle.
 (Over 400 lines: the handle and the task that drives it are one state machine,
 kept in one place.)
 """
@@ -12,7 +14,6 @@ from __future__ import annotations
 
 import asyncio
 import enum
-import logging
 import traceback
 import weakref
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
@@ -25,10 +26,10 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Generator
     from types import TracebackType
 
+    from .._core._logging import ScopedLogger
     from ._executive import Executive
 
 T = TypeVar("T")
-_log = logging.getLogger("pyrobots_aio.actions")
 
 _PENDING, _RUNNING, _FINISHING, _DONE = range(4)
 
@@ -95,6 +96,7 @@ class ActionHandle(Generic[T]):
         "_executive",
         "_finalizers",
         "_fn",
+        "_internal",
         "_outcome",
         "_phase",
         "_task",
@@ -140,7 +142,8 @@ class ActionHandle(Generic[T]):
         self._cancel_reason: str | None = None
         self._cancel_by: ActionHandle[Any] | None = None
         self._waiters: list[asyncio.Future[None]] | None = None
-        self._callbacks: list[Callable[[], None]] | None = None
+        self._callbacks: list[Callable[[ActionHandle[T]], object]] | None = None
+        self._internal: list[Callable[[ActionHandle[T]], object]] | None = None
         self._finalizers: list[Callable[[], None]] | None = None
         self._unretrieved: weakref.finalize[Any, Any] | None = None
 
@@ -150,11 +153,18 @@ class ActionHandle(Generic[T]):
         return self._result_when_done().__await__()
 
     async def _result_when_done(self) -> T:
-        await self.wait_done()
+        try:
+            await self._wait_done("await")
+        except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
+            self.cancel("the task awaiting it was cancelled")
+            raise
         return self.result()
 
     async def wait(self) -> T:
         """Wait for the action and return its result (pyRobots' spelling of ``await handle``).
+
+        Like ``await handle``, it owns the action: if the waiting task is
+        cancelled (a deadline of the caller's), the action is cancelled too.
 
         Raises:
             ActionInterrupted: The action was cancelled.
@@ -166,21 +176,26 @@ class ActionHandle(Generic[T]):
     async def wait_done(self) -> Outcome:
         """Wait until the action is done and return its `Outcome`, never raising its error.
 
-        If the task waiting here is cancelled, the action is cancelled too: the
-        caller owns the deadline (``async with asyncio.timeout(2): await handle``).
+        It does not own the action: a waiter that gives up (cancelled, or its
+        ``asyncio.timeout`` expired) leaves the action running. ``await handle``
+        owns it instead.
         """
+        await self._wait_done("wait for")
+        return self._outcome
+
+    async def _wait_done(self, verb: str) -> None:
         if self._phase != _DONE:
-            fut = self._executive.loop.create_future()
+            loop = self._executive.check_loop(f"{verb} action {self.name}#{self.id}")
+            fut = loop.create_future()
             if self._waiters is None:
                 self._waiters = []
             self._waiters.append(fut)
             try:
                 await fut
-            except asyncio.CancelledError:
-                self.cancel("the task awaiting it was cancelled")
-                raise
+            finally:
+                if not fut.done() and self._waiters is not None:
+                    self._waiters.remove(fut)
         self._retrieved()
-        return self._outcome
 
     # -- inspecting -------------------------------------------------------
 
@@ -288,14 +303,38 @@ class ActionHandle(Generic[T]):
             self._finalizers = []
         self._finalizers.append(finalizer)
 
-    def add_done_callback(self, callback: Callable[[], None]) -> None:
-        """Call ``callback()`` once the action is done (at once if it already is)."""
+    def add_done_callback(self, callback: Callable[[ActionHandle[T]], object]) -> None:
+        """Call ``callback(handle)`` once the action is done, as asyncio's futures do.
+
+        It is scheduled on the loop (``call_soon``) when the action is done, or at
+        once if it already is. An exception in it is logged with its traceback on
+        ``pyrobots_aio.actions`` and disturbs nothing else.
+        """
         if self._phase == _DONE:
-            callback()
+            _schedule(callback, self)
             return
         if self._callbacks is None:
             self._callbacks = []
         self._callbacks.append(callback)
+
+    def remove_done_callback(self, callback: Callable[[ActionHandle[T]], object]) -> int:
+        """Remove every registration of ``callback``; return how many were removed."""
+        if not self._callbacks:
+            return 0
+        kept = [cb for cb in self._callbacks if cb != callback]
+        removed = len(self._callbacks) - len(kept)
+        self._callbacks = kept
+        return removed
+
+    def _on_done(self, callback: Callable[[ActionHandle[T]], object]) -> None:
+        """Call ``callback(handle)`` synchronously when done, before the done-callbacks.
+
+        For the library's own bookkeeping (waiting for several actions, resource
+        records, monitor callbacks in flight); the action must not be done yet.
+        """
+        if self._internal is None:
+            self._internal = []
+        self._internal.append(callback)
 
     def _interrupt(self) -> None:
         """Throw `ActionCancelled` into the body at its current await, if the body runs.
@@ -328,6 +367,10 @@ class ActionHandle(Generic[T]):
         self._phase = _DONE
         self._coro = None
         self.finished_at = self._executive.loop.time()
+        if self._callbacks is not None:  # scheduled first: they run before awaiters resume
+            callbacks, self._callbacks = self._callbacks, None
+            for callback in callbacks:
+                _schedule(callback, self)
         waiting = False
         if self._waiters is not None:
             for fut in self._waiters:
@@ -339,10 +382,16 @@ class ActionHandle(Generic[T]):
         if self._outcome is Outcome.FAILED and not waiting:
             self._report_unless_retrieved()
         self._executive.finished(self)
-        if self._callbacks is not None:
-            callbacks, self._callbacks = self._callbacks, None
-            for callback in callbacks:
-                callback()
+        if self._internal is not None:
+            internal, self._internal = self._internal, None
+            for callback in internal:
+                _call_back(callback, self)
+
+    def _forgotten(self) -> bool:
+        """Whether the action never started and nothing waits for it (a missing ``await``?)."""
+        return self.started_at is None and not (
+            self._cancel_requested or self._waiters or self._callbacks
+        )
 
     def _report_unless_retrieved(self) -> None:
         """Log the failure once this handle is forgotten, unless its error was retrieved.
@@ -354,7 +403,9 @@ class ActionHandle(Generic[T]):
         """
         error = self._error
         report = "".join(traceback.format_exception(error)).rstrip() if error is not None else ""
-        self._unretrieved = weakref.finalize(self, _report_failure, self.name, self.id, report)
+        self._unretrieved = weakref.finalize(
+            self, _report_failure, self._executive.log, self.name, self.id, report
+        )
 
     def _retrieved(self) -> None:
         if self._unretrieved is not None:
@@ -369,7 +420,9 @@ class ActionHandle(Generic[T]):
             try:
                 finalizer()
             except Exception:
-                _log.exception("finalizer of action %s#%d failed", self.name, self.id)
+                self._executive.log.exception(
+                    "finalizer of action %s#%d failed", self.name, self.id
+                )
 
     def __repr__(self) -> str:
         parent = f" parent={self.parent.name}#{self.parent.id}" if self.parent else ""
@@ -393,8 +446,13 @@ async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
             return
     handle._phase = _FINISHING
     try:
-        if handle._children:
-            await executive.reap_children(handle)
+        while handle._children:
+            try:
+                await executive.reap_children(handle)
+            except asyncio.CancelledError:
+                # Meant for the body, which ended before it arrived (it returned without
+                # awaiting again): the children still get waited for.
+                continue
     finally:
         if handle._cancel_requested and handle._outcome is Outcome.SUCCEEDED:
             # cancelled while its children wound up: CANCELLED (a failure is never masked)
@@ -414,7 +472,7 @@ async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> No
             exc.handle = handle
             handle._settle(Outcome.SKIPPED, error=exc)
         elif handle._cancel_requested:
-            _log.warning(
+            handle._executive.log.warning(
                 "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
             )
             handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
@@ -437,5 +495,24 @@ def _without_this_frame(error: BaseException) -> TracebackType | None:
     return tb.tb_next if tb is not None else None
 
 
-def _report_failure(name: str, ident: int, report: str) -> None:
-    _log.error("action %s#%d failed and nobody retrieved its error:\n%s", name, ident, report)
+def _report_failure(log: ScopedLogger, name: str, ident: int, report: str) -> None:
+    log.error("action %s#%d failed and nobody retrieved its error:\n%s", name, ident, report)
+
+
+def _schedule(callback: Callable[[ActionHandle[Any]], object], handle: ActionHandle[Any]) -> None:
+    """Run a done-callback soon on the robot's loop (at once if no loop runs any more)."""
+    loop = handle._executive._loop or asyncio._get_running_loop()
+    if loop is None:
+        _call_back(callback, handle)
+    else:
+        loop.call_soon(_call_back, callback, handle)
+
+
+def _call_back(callback: Callable[[ActionHandle[Any]], object], handle: ActionHandle[Any]) -> None:
+    """Call a done-callback; log what it raises (it must not disturb the executive)."""
+    try:
+        callback(handle)
+    except Exception:
+        handle._executive.log.exception(
+            "done-callback %r of action %s#%d failed", callback, handle.name, handle.id
+        )

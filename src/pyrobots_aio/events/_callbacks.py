@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import asyncio
 import inspect
-import logging
 from collections import deque
 from typing import TYPE_CHECKING, Any
 
+from .._core._waiting import Countdown, wait_shielded
 from ..actions import Action, ActionHandle, BoundAction
 from ..actions._where import location
 
@@ -23,9 +23,11 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
     from contextvars import Context
 
-_log = logging.getLogger("pyrobots_aio.events")
+    from .._core._logging import ScopedLogger
 
 _PLAIN, _COROUTINE, _ACTION = "function", "coroutine function", "action"
+QUIET_PERIOD = 10.0
+"""Seconds (loop time) after a logged callback failure during which repeats are only counted."""
 
 
 def describe(callback: object, *, qualified: bool = True) -> str:
@@ -52,8 +54,10 @@ class CallbackRunner:
         "_callback",
         "_calls",
         "_context",
+        "_failures",
         "_idle_waiters",
         "_kind",
+        "_log",
         "_loop",
         "_on_settled",
         "_robot",
@@ -67,8 +71,11 @@ class CallbackRunner:
         robot: object,
         context: Context,
         on_settled: Callable[[], None],
+        log: ScopedLogger,
     ) -> None:
         self._loop = loop
+        self._log = log
+        self._failures = FailureLog(loop, log)
         self._robot = robot
         self._context = context
         self.label = "a monitor's callback"  # what log messages call it
@@ -138,23 +145,23 @@ class CallbackRunner:
         args = (self._robot, *self._args) if isinstance(callback, Action) else self._args
         try:
             handle = self._context.copy().run(callback, *args)
-        except Exception:
-            _log.exception("%s could not start its action", self.label)
+        except Exception as error:
+            self._failures.report(f"{self.label} could not start its action", error)
             return
         self._keep(handle)
 
     def _keep(self, handle: ActionHandle[Any]) -> None:
         """Count ``handle`` as a callback in flight until the action is done."""
         self._actions.add(handle)
-        handle.add_done_callback(lambda: self._action_done(handle))
+        handle._on_done(self._action_done)
 
     def _call_plain(self) -> None:
         self._calls.popleft()
         assert self._callback is not None
         try:
             result = self._callback(*self._args)
-        except Exception:
-            _log.exception("%s failed", self.label)
+        except Exception as error:
+            self._failures.report(f"{self.label} failed", error)
         else:
             if inspect.iscoroutine(result):  # a function returning a coroutine: run it
                 self.track(result, callback=True)
@@ -165,7 +172,7 @@ class CallbackRunner:
     def _task_done(self, task: asyncio.Task[Any]) -> None:
         self._tasks.pop(task, None)
         if not task.cancelled() and (error := task.exception()) is not None:
-            _log.error("%s failed", self.label, exc_info=error)
+            self._failures.report(f"{self.label} failed", error)
         self._check_settled()
 
     def _action_done(self, handle: ActionHandle[Any]) -> None:
@@ -205,7 +212,7 @@ class CallbackRunner:
     def escalate(self, grace: float) -> None:
         """Cancel again, with a warning, every task still running a grace after cancellation."""
         for task in self._tasks:
-            _log.warning(
+            self._log.warning(
                 "%s still running %.3g s after cancellation, at %s; cancelling it again",
                 self.label,
                 grace,
@@ -216,7 +223,7 @@ class CallbackRunner:
     def abandon(self, grace: float) -> None:
         """Forget, with an error, what is still running two graces after cancellation."""
         for task in self._tasks:
-            _log.error(
+            self._log.error(
                 "%s ignored cancellation for %.3g s, at %s; abandoning it (its task may "
                 "outlive the robot)",
                 self.label,
@@ -228,6 +235,49 @@ class CallbackRunner:
         self._check_settled()
 
 
+class FailureLog:
+    """Logs a callback's failures: each with its traceback, but repeats only as a count.
+
+    After a failure is logged, further failures within `QUIET_PERIOD` seconds
+    are counted, and the count is given with the next one logged (or by
+    `flush`): a callback failing on every write of a 50 Hz key logs one
+    traceback every ten seconds, not fifty a second.
+    """
+
+    __slots__ = ("_log", "_loop", "_quiet_until", "_since", "_suppressed")
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, log: ScopedLogger) -> None:
+        self._loop = loop
+        self._log = log
+        self._quiet_until = -float("inf")
+        self._suppressed = 0
+        self._since = ""
+
+    def report(self, what: str, error: BaseException) -> None:
+        """Log ``what`` with ``error``'s traceback, or count it if one was logged just before."""
+        now = self._loop.time()
+        if now < self._quiet_until:
+            self._suppressed += 1
+            self._since = what
+            return
+        more = ""
+        if self._suppressed:
+            more = f" (and {self._suppressed} more times since the last report, not shown)"
+        self._log.error("%s%s", what, more, exc_info=error)
+        self._suppressed = 0
+        self._quiet_until = now + QUIET_PERIOD
+
+    def flush(self) -> None:
+        """Log the count of failures not shown yet, if any."""
+        if self._suppressed:
+            self._log.error(
+                "%s %d more times since the last report (tracebacks not shown)",
+                self._since,
+                self._suppressed,
+            )
+            self._suppressed = 0
+
+
 async def settle(runners: Sequence[CallbackRunner], grace: float) -> None:
     """Wait until every runner has settled, bounded by two graces.
 
@@ -236,18 +286,31 @@ async def settle(runners: Sequence[CallbackRunner], grace: float) -> None:
     waiting task is cancelled meanwhile, the bounded wait still completes, then
     the cancellation is re-raised (so robot shutdown never leaves tasks behind).
     """
+    late = [r for r in runners if not r.settled]
+    for runner in runners:
+        runner._failures.flush()
+    if not late:
+        return
     loop = asyncio.get_running_loop()
-    interrupted: BaseException | None = None
-    for stage in (CallbackRunner.escalate, CallbackRunner.abandon):
-        deadline = loop.time() + grace
-        while (late := [r for r in runners if not r.settled]) and deadline > loop.time():
-            try:
-                await asyncio.wait([r.idle() for r in late], timeout=deadline - loop.time())
-            except asyncio.CancelledError as exc:
-                interrupted = exc
-        if not late:
-            break
-        for runner in late:
+    countdown = Countdown(loop, len(late))
+    for runner in late:
+        runner.idle().add_done_callback(countdown.tick)
+    timers = [
+        loop.call_later(grace * n, _overdue, late, stage, grace)
+        for n, stage in ((1, CallbackRunner.escalate), (2, CallbackRunner.abandon))
+    ]
+    try:
+        await wait_shielded(countdown.future)
+    finally:
+        for timer in timers:
+            timer.cancel()
+
+
+def _overdue(
+    runners: Sequence[CallbackRunner],
+    stage: Callable[[CallbackRunner, float], None],
+    grace: float,
+) -> None:
+    for runner in runners:
+        if not runner.settled:
             stage(runner, grace)
-    if interrupted is not None:
-        raise interrupted

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
 from typing import TYPE_CHECKING, Any, Unpack
 
 from .._exceptions import InvalidConditionError, RobotNotRunningError
@@ -16,6 +16,7 @@ from ._conditions import (
     parse,
 )
 from ._monitor import EventMonitor, Host, label
+from ._watch import Feed, check_buffer, iterate
 
 if TYPE_CHECKING:
     from .._core._instrument import Instruments
@@ -56,6 +57,7 @@ class EventManager:
         self._executive = executive
         self._instruments = instruments
         self._monitors: dict[EventMonitor, None] = {}
+        self._feeds: dict[Feed, None] = {}
         self._next_id = 1
         self._host: Host | None = None
 
@@ -157,6 +159,46 @@ class EventManager:
         finally:
             monitor.stop_monitoring()
 
+    def watch(self, key: str, buffer: int = 64) -> AsyncIterator[Any]:
+        """Iterate over every change of ``key`` (each write of a different value), in order.
+
+        Writes are buffered from this call on; the iteration ends cleanly when
+        the robot stops or `cancel_all` runs. A consumer more than ``buffer``
+        values behind loses the oldest (counted, with one warning).
+
+        Raises:
+            UnknownStateKeyError: ``key`` is not a state key (the closest are listed).
+            ValueError: ``buffer`` is not a positive int.
+            RobotNotRunningError: The robot is not running.
+
+        Example:
+            >>> import asyncio
+            >>> from pyrobots_aio import Robot
+            >>> async def main() -> list[bool]:
+            ...     seen = []
+            ...     async with Robot() as robot:
+            ...         robot.state.bumper = False
+            ...         changes = robot.watch("bumper")
+            ...         for pressed in (True, True, False):  # True twice: one change
+            ...             robot.state.bumper = pressed
+            ...         async for pressed in changes:
+            ...             seen.append(pressed)
+            ...             if not pressed:
+            ...                 break
+            ...     return seen
+            >>> asyncio.run(main())
+            [True, False]
+        """
+        size = check_buffer(buffer)
+        host = self._running_host(key)
+        self._state.require(key)
+        feed = Feed(host.loop, self._state, key, size, host.log)
+        self._feeds[feed] = None
+        return iterate(feed, self._forget_feed)
+
+    def _forget_feed(self, feed: Feed) -> None:
+        self._feeds.pop(feed, None)
+
     def _create(
         self,
         var: str | Predicate,
@@ -192,11 +234,11 @@ class EventManager:
                 "create monitors inside 'async with robot:'"
             )
             raise RobotNotRunningError(msg)
-        loop = executive.loop
+        loop = executive.check_loop(f"monitor {what!r}")
         if self._host is None or self._host.loop is not loop:
             self._host = Host(
                 self._robot, self._state, loop, self._instruments, executive.cancel_grace,
-                self._forget,
+                self._forget, executive.log_scope.logger("pyrobots_aio.events"),
             )  # fmt: skip
         return self._host
 
@@ -215,11 +257,13 @@ class EventManager:
             monitor.stop_monitoring()
 
     async def cancel_all(self, reason: str | None = None) -> None:
-        """Stop every monitor, cancel running callbacks and wait until they are done.
+        """Stop every monitor and `watch`, cancel running callbacks and wait until they are done.
 
         Bounded like actions' cleanup (``cancel_grace``, twice at most), and it
         completes even if the calling task is cancelled meanwhile.
         """
+        for feed in list(self._feeds):
+            feed.close()
         monitors = list(self._monitors)
         for monitor in monitors:
             monitor.stop_monitoring()

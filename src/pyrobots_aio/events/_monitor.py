@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from .._core._instrument import Instruments
+    from .._core._logging import ScopedLogger
     from ..state import StateStore
     from ._conditions import Condition
 
@@ -34,6 +35,7 @@ class Host:
     instruments: Instruments
     grace: float
     forget: Callable[[EventMonitor], None]
+    log: ScopedLogger
 
 
 class EventMonitor:
@@ -87,7 +89,7 @@ class EventMonitor:
         context = contextvars.copy_context()
         context.run(current_action.set, None)  # callbacks run in the robot's root scope
         loop = host.loop
-        self._runner = CallbackRunner(loop, host.robot, context, self._settled)
+        self._runner = CallbackRunner(loop, host.robot, context, self._settled, host.log)
         self._runner.label = f"monitor {self._name!r}"  # evaluations of an async predicate
         period = 1.0 / max_firing_freq if max_firing_freq and not one_shot else 0.0
         self._trigger = Trigger(

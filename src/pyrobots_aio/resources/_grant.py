@@ -9,7 +9,7 @@ holder is that owner or one of its ancestors. Each leaf also keeps a
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar
 
 from .._exceptions import LockUsageError
 from ._queue import WaitQueue
@@ -51,8 +51,8 @@ class Owner(Protocol):
     def done(self) -> bool:
         """Whether it is over; its resources are then released."""
 
-    def add_done_callback(self, callback: Callable[[], None]) -> None:
-        """Call ``callback()`` once it is done."""
+    def add_done_callback(self, callback: Callable[[Any], object]) -> None:
+        """Call ``callback(owner)`` once it is done (soon after, or at once)."""
 
 
 OwnerT = TypeVar("OwnerT", bound=Owner)

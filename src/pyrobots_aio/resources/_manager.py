@@ -14,7 +14,6 @@ one waiter or a thousand.
 from __future__ import annotations
 
 import asyncio
-import functools
 import logging
 from typing import TYPE_CHECKING, Generic, NoReturn
 
@@ -217,7 +216,7 @@ class ResourceManager(Generic[OwnerT]):
         record = self._owners.get(owner)
         if record is None:
             record = self._owners[owner] = _Record()
-            owner.add_done_callback(functools.partial(self._owner_done, owner))
+            owner.add_done_callback(self._owner_done)
         return record
 
     async def _wait(self, grant: Grant[OwnerT]) -> Grant[OwnerT]:

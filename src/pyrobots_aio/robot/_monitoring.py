@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Self, Unpack
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import AsyncIterator, Callable
 
     from ..events import Conditions, EventManager, EventMonitor
     from ..state import StateStore
@@ -134,3 +134,11 @@ class StateMethods:
             0.25
         """
         return await self.events.wait(var, poll, **cond)
+
+    def watch(self, key: str, buffer: int = 64) -> AsyncIterator[Any]:
+        """Every change of state ``key``, as an async iterator ending when the robot stops.
+
+        ``async for pressed in robot.watch("bumper"): ...`` sees each write of a
+        new value, in order, from the call on; see `EventManager.watch`.
+        """
+        return self.events.watch(key, buffer)
