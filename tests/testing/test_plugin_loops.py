@@ -282,12 +282,17 @@ _MISSING_ASYNCIO = """
     async def test_asyncio_without_virtual_time():
         async with SimRobot() as robot:
             await robot.sleep(1)
+
+    @pytest.mark.virtual_time
+    class TestMarkedAsAClass:
+        def test_sync(self):  # the class's marker covers it too: nothing to run, no error
+            pass
     """
 
 
 def test_the_errors_name_the_marker_that_is_missing(pytester: pytest.Pytester) -> None:
     result = _run(pytester, _MISSING_ASYNCIO)
-    result.assert_outcomes(failed=1, errors=4)
+    result.assert_outcomes(passed=1, failed=1, errors=4)
     async_fix = "pytest-asyncio does not run this test: mark it @pytest.mark.asyncio"
     sync_fix = "make it an async def test marked @pytest.mark.asyncio"
     lines = result.stdout.lines

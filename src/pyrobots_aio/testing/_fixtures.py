@@ -87,6 +87,10 @@ def _virtual_asked_by(item: pytest.Item) -> str | None:
     """What asks for virtual time in ``item`` (the marker, or a fixture), or None."""
     if item.get_closest_marker("virtual_time"):
         return "marker 'virtual_time'"
+    return _virtual_fixture_of(item)
+
+
+def _virtual_fixture_of(item: pytest.Item) -> str | None:
     for name in getattr(item, "fixturenames", ()):
         if name in _VIRTUAL_FIXTURES:
             return f"fixture {name!r}"
@@ -94,9 +98,18 @@ def _virtual_asked_by(item: pytest.Item) -> str | None:
 
 
 def _virtual_time_problem(item: pytest.Item) -> str | None:
-    """A test that asks for virtual time but that pytest-asyncio does not run."""
-    asker = _virtual_asked_by(item)
-    if asker is None or pytest_asyncio.is_async_test(item):
+    """A test that asks for virtual time but that pytest-asyncio does not run.
+
+    A fixture that needs virtual time would fail anyway; the marker is only
+    held against a test it decorates itself (a module's ``pytestmark`` may
+    cover its sync tests too).
+    """
+    if pytest_asyncio.is_async_test(item):
+        return None
+    asker = _virtual_fixture_of(item)
+    if asker is None and any(mark.name == "virtual_time" for mark in item.own_markers):
+        asker = "marker 'virtual_time'"
+    if asker is None:
         return None
     if inspect.iscoroutinefunction(getattr(item, "obj", None)):
         return (
