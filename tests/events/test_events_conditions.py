@@ -54,25 +54,32 @@ def _steps(start: float, stop: float, step: float) -> list[float]:
 
 
 @pytest.mark.asyncio
-async def test_decrease_follows_a_recharge_up_and_fires_at_each_tenth_on_the_way_down() -> None:
+@pytest.mark.parametrize(
+    ("kind", "levels", "fired"),
+    [
+        # DESIGN §11: recharged from 0.5 to 1.0, then drained: 0.9, 0.8, ..., not only below 0.4
+        (
+            "decrease",
+            _steps(0.5, 1.0, 0.05) + _steps(1.0, 0.0, 0.05),
+            [0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.0],
+        ),
+        (
+            "increase",
+            _steps(0.5, 0.0, 0.05) + _steps(0.0, 1.0, 0.05),
+            [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0],
+        ),
+    ],
+)
+async def test_the_reference_follows_the_other_way_then_fires_at_each_tenth(
+    kind: str, levels: list[float], fired: list[float]
+) -> None:
     log = EventLog()
     async with Robot(instruments=[log]) as robot:
         robot.state.battery = 0.5
-        draining = robot.whenever("battery", decrease=0.1)
-        for level in _steps(0.5, 1.0, 0.05) + _steps(1.0, 0.0, 0.05):
+        monitor = robot.whenever("battery", **{kind: 0.1})
+        for level in levels:
             robot.state.battery = level
-    assert _values(log, draining) == [0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.0]
-
-
-@pytest.mark.asyncio
-async def test_increase_follows_a_discharge_down_and_fires_at_each_tenth_on_the_way_up() -> None:
-    log = EventLog()
-    async with Robot(instruments=[log]) as robot:
-        robot.state.battery = 0.5
-        charging = robot.whenever("battery", increase=0.1)
-        for level in _steps(0.5, 0.0, 0.05) + _steps(0.0, 1.0, 0.05):
-            robot.state.battery = level
-    assert _values(log, charging) == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]
+    assert _values(log, monitor) == fired
 
 
 @pytest.mark.asyncio
