@@ -25,13 +25,22 @@ def test_ci_runs_the_readme_check_command() -> None:
     assert blocks("bash")[1].strip() in ci.splitlines()
 
 
+def test_the_pytest_config_it_gives_is_pytest_asyncio_s() -> None:
+    (config,) = blocks("toml")
+    assert config.startswith("[tool.pytest.ini_options]\n")
+    assert 'asyncio_default_fixture_loop_scope = "function"' in config.splitlines()
+
+
 def test_every_python_snippet_runs(tmp_path: Path) -> None:
     snippets = blocks("python")
     assert snippets
+    # a user's project: the pytest config the README gives, and any warning fails the run
+    (tmp_path / "pyproject.toml").write_text(blocks("toml")[0])
+    pytest_run = ["-m", "pytest", "-q", "-p", "no:cacheprovider", "-W", "error"]
     for number, code in enumerate(snippets):
         script = tmp_path / f"test_snippet_{number}.py"
         script.write_text(code)
-        runner = ["-m", "pytest", "-q", "-p", "no:cacheprovider"] if "def test_" in code else []
+        runner = pytest_run if "def test_" in code else []
         done = subprocess.run(
             [sys.executable, *runner, str(script)],
             capture_output=True,

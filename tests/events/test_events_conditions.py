@@ -1,4 +1,4 @@
-"""Condition semantics: value, becomes, above/below, increase/decrease references, held_for."""
+"""Condition semantics: value, becomes, above/below, increase/decrease ratchets, held_for."""
 
 from __future__ import annotations
 
@@ -22,27 +22,79 @@ def _times(log: EventLog, monitor: EventMonitor, t0: float) -> list[float]:
 
 
 @pytest.mark.asyncio
-async def test_increase_fires_from_the_value_at_the_last_firing() -> None:
+async def test_increase_fires_from_the_last_firing_or_the_lowest_value_since() -> None:
     log = EventLog()
     async with Robot(instruments=[log]) as robot:
         robot.state.scale = 10.0
         squeezed = robot.whenever("scale", increase=1.0)  # reference: 10.0, the value now
         for value in (10.5, 11.0, 11.5, 10.0, 11.75, 12.0, 14.0, 13.0):
             robot.state.scale = value
-    # 11.0 fires (reference 11.0); 11.5, 10.0, 11.75 do not; 12.0 fires; 14.0 fires once.
-    assert _values(log, squeezed) == [11.0, 12.0, 14.0]
+    # 11.0 fires (reference 11.0); 11.5 does not; the fall to 10.0 drags the reference
+    # down with it, so 11.75 fires (reference 11.75); 12.0 does not; 14.0 fires once.
+    assert _values(log, squeezed) == [11.0, 11.75, 14.0]
 
 
 @pytest.mark.asyncio
-async def test_decrease_fires_from_the_value_at_the_last_firing() -> None:
+async def test_decrease_fires_from_the_last_firing_or_the_highest_value_since() -> None:
     log = EventLog()
     async with Robot(instruments=[log]) as robot:
         robot.state.battery = 1.0
         draining = robot.whenever("battery", decrease=0.25)
         for value in (0.875, 0.75, 0.5, 0.625, 0.375, 0.25):
             robot.state.battery = value
-    # a rise (0.5 -> 0.625) does not move the reference: 0.375 is 0.125 below 0.5
-    assert _values(log, draining) == [0.75, 0.5, 0.25]
+    # a rise (0.5 -> 0.625) lifts the reference: 0.375 is 0.25 below 0.625
+    assert _values(log, draining) == [0.75, 0.5, 0.375]
+
+
+def _steps(start: float, stop: float, step: float) -> list[float]:
+    """``start`` to ``stop`` (included) by ``step``, each the float nearest its decimal."""
+    count = round(abs(stop - start) / step)
+    sign = 1 if stop > start else -1
+    return [round(start + sign * step * k, 2) for k in range(1, count + 1)]
+
+
+@pytest.mark.asyncio
+@pytest.mark.parametrize(
+    ("kind", "levels", "fired"),
+    [
+        # DESIGN §11: recharged from 0.5 to 1.0, then drained: 0.9, 0.8, ..., not only below 0.4
+        (
+            "decrease",
+            _steps(0.5, 1.0, 0.05) + _steps(1.0, 0.0, 0.05),
+            [0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.0],
+        ),
+        (
+            "increase",
+            _steps(0.5, 0.0, 0.05) + _steps(0.0, 1.0, 0.05),
+            [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0],
+        ),
+    ],
+)
+async def test_the_reference_follows_the_other_way_then_fires_at_each_tenth(
+    kind: str, levels: list[float], fired: list[float]
+) -> None:
+    log = EventLog()
+    async with Robot(instruments=[log]) as robot:
+        robot.state.battery = 0.5
+        monitor = robot.whenever("battery", **{kind: 0.1})
+        for level in levels:
+            robot.state.battery = level
+    assert _values(log, monitor) == fired
+
+
+@pytest.mark.asyncio
+@pytest.mark.parametrize("start", [None, float("nan")], ids=["None", "nan"])
+async def test_a_nan_or_none_reading_never_becomes_the_reference(start: float | None) -> None:
+    nan = float("nan")
+    log = EventLog()
+    async with Robot(instruments=[log]) as robot:
+        robot.state.battery = start
+        draining = robot.whenever("battery", decrease=0.1)
+        charging = robot.whenever("battery", increase=0.1)
+        for level in (nan, None, 1.0, nan, 0.9, None, 0.8, nan, 0.9, 1.0):
+            robot.state.battery = level
+    assert _values(log, draining) == [0.9, 0.8]
+    assert _values(log, charging) == [0.9, 1.0]
 
 
 @pytest.mark.asyncio

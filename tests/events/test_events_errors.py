@@ -90,6 +90,19 @@ async def test_conditions_of_the_wrong_type() -> None:
 
 
 @pytest.mark.asyncio
+@pytest.mark.parametrize("kind", ["value", "becomes"])
+async def test_a_nan_target_that_can_never_be_equalled(kind: str) -> None:
+    async with Robot() as robot:
+        robot.state.ir_left = float("nan")
+        assert _refused(robot, "ir_left", **{kind: float("nan")}) == (
+            f"{kind}=nan can never fire: NaN equals nothing, not even NaN; to react to a NaN "
+            "reading, watch a predicate: "
+            "robot.whenever(lambda robot: math.isnan(robot.state['ir_left']))"
+        )
+        assert robot.events.monitors() == []
+
+
+@pytest.mark.asyncio
 async def test_a_numeric_condition_on_a_key_that_holds_no_number() -> None:
     async with Robot() as robot:
         robot.state.mode = "idle"

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 MISSING = (
     "McapRecorder needs the 'mcap' package, which is optional: install it with "
-    'pip install "pyrobots-aio[mcap]" (or pip install mcap), or record with JsonlRecorder'
+    'pip install mcap (or pip install -e ".[mcap]" in a checkout), or record with JsonlRecorder'
 )
 
 

@@ -545,5 +545,7 @@ def test_mujoco_missing(monkeypatch: pytest.MonkeyPatch) -> None:
         SimWorld()
     message = str(caught.value)
     assert message.startswith("the simulated robot needs MuJoCo, which cannot be imported (")
-    assert message.endswith('); install it with: pip install "pyrobots-aio[sim]"')
+    assert message.endswith(
+        '); install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
+    )
     assert isinstance(caught.value, ImportError)

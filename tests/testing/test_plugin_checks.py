@@ -112,7 +112,7 @@ def test_without_a_recent_pytest_asyncio_only_the_plugin_s_users_fail(
     pytester.makepyfile(textwrap.dedent(_SOURCE_NEEDING_THE_PLUGIN))
     result = pytester.runpytest("-p", "no:asyncio")
     result.assert_outcomes(passed=1, errors=2)
-    fix = "pip install 'pyrobots-aio[testing]' (pytest-asyncio>=1.4)"
+    fix = 'pip install "pytest-asyncio>=1.4" (or pip install -e ".[testing]" in a checkout)'
     needs = f"the pyrobots_aio fixtures and virtual_time marker {why}{fix}"
     assert f"fixture 'robot': {needs}" in result.stdout.lines
     assert f"marker 'virtual_time': {needs}" in result.stdout.lines

@@ -3,8 +3,14 @@
 A condition turns a value of the watched key into "holds" or "does not hold".
 Level conditions (``value``, ``above``, ``below``, predicates) fire while it
 holds; edge conditions (``becomes``, ``increase``, ``decrease``) fire on each
-change into holding. ``increase``/``decrease`` compare with a reference: the
-value at the last firing (initially the value when the monitor was created).
+change into holding. ``increase``/``decrease`` compare with a reference that
+ratchets, as in pyRobots: it is the value at the last firing (initially the
+value when the monitor was created), and while the value moves the other way
+the reference follows it. So ``decrease=0.1`` on a battery charged from 0.5 to
+1.0 then drained fires at 0.9, 0.8, ... and not only below 0.4. A reading of
+None or NaN never becomes the reference, and a step is judged as `math.isclose`
+does (``1.0 - 0.9`` is a hair under 0.1 in binary floating point, yet it is a
+step of 0.1).
 """
 
 from __future__ import annotations
@@ -36,12 +42,34 @@ class Conditions(TypedDict, total=False):
         becomes: Edge: fires on each change of the key into this value.
         above: Level: holds while the key is greater than this number.
         below: Level: holds while the key is less than this number.
-        increase: Edge: fires when the key rose by at least this much since
-            the last firing (initially: since the monitor was created).
-        decrease: Edge: fires when the key fell by at least this much since
-            the last firing (initially: since the monitor was created).
+        increase: Edge: fires when the key rose by at least this much above
+            its reference: the value at the last firing (initially, at the
+            monitor's creation), or the lowest value since if it fell below
+            that. None and NaN readings are ignored.
+        decrease: Edge: fires when the key fell by at least this much below
+            its reference: the value at the last firing (initially, at the
+            monitor's creation), or the highest value since if it rose above
+            that. ``decrease=0.1`` on a battery charged from 0.5 to 1.0 then
+            drained fires at 0.9, 0.8, ...
         held_for: Seconds the condition must hold before it fires; combines
             with any one of the others, or with a predicate.
+
+    Example:
+        >>> import asyncio
+        >>> from pyrobots_aio import Robot
+        >>> async def main() -> list[float]:
+        ...     fired = []
+        ...     async with Robot() as robot:
+        ...         robot.state.battery = 0.5
+        ...         robot.whenever("battery", decrease=0.1).do(
+        ...             lambda: fired.append(robot.state.battery)
+        ...         )
+        ...         for level in (0.75, 1.0, 0.95, 0.9, 0.85, 0.8):  # recharged, then drained
+        ...             robot.state.battery = level
+        ...             await robot.sleep(0)
+        ...     return fired
+        >>> asyncio.run(main())
+        [0.9, 0.8]
     """
 
     value: object
@@ -74,7 +102,7 @@ class Condition:
 
     @property
     def relative(self) -> bool:
-        """Whether it compares with a reference that moves at each firing."""
+        """Whether it compares with a ratcheting reference (``increase``, ``decrease``)."""
         return self.kind in _RELATIVE
 
     def describe(self) -> str:
@@ -87,6 +115,15 @@ class Condition:
     def test(self) -> Callable[[Any, Any], bool]:
         """The truth test ``holds(value, reference)`` of a key condition."""
         return _TESTS[self.kind or "value"](self.target)
+
+    def ratchet(self) -> Callable[[Any, Any], Any] | None:
+        """``follow(value, reference) -> reference`` for ``increase``/``decrease``, else None.
+
+        The reference follows a value that moved the other way (down for
+        ``increase``, up for ``decrease``), replaces a missing one, and ignores
+        a None or NaN value.
+        """
+        return _RATCHETS.get(self.kind or "value")
 
 
 # State values are untyped (Any): a test may meet anything a backend or user wrote.
@@ -105,11 +142,29 @@ def _below(target: Any) -> Callable[[Any, Any], bool]:
 
 
 def _increase(target: Any) -> Callable[[Any, Any], bool]:
-    return lambda value, ref: value is not None and ref is not None and bool(value - ref >= target)
+    return lambda value, ref: _known(value) and _known(ref) and _at_least(value - ref, target)
 
 
 def _decrease(target: Any) -> Callable[[Any, Any], bool]:
-    return lambda value, ref: value is not None and ref is not None and bool(ref - value >= target)
+    return lambda value, ref: _known(value) and _known(ref) and _at_least(ref - value, target)
+
+
+def _at_least(step: Any, target: float) -> bool:
+    """``step >= target``, forgiving binary rounding (``1.0 - 0.9 == 0.09999999999999998``)."""
+    return bool(step >= target) or math.isclose(step, target)  # to 1e-9 of the step
+
+
+def _known(value: Any) -> bool:
+    """Whether a reading can serve as (or be compared with) a reference: not None, not NaN."""
+    return value is not None and not (isinstance(value, Real) and math.isnan(value))
+
+
+def _follow_down(value: Any, ref: Any) -> Any:
+    return value if _known(value) and (not _known(ref) or value < ref) else ref
+
+
+def _follow_up(value: Any, ref: Any) -> Any:
+    return value if _known(value) and (not _known(ref) or value > ref) else ref
 
 
 _TESTS: dict[str, Callable[[Any], Callable[[Any, Any], bool]]] = {
@@ -119,6 +174,10 @@ _TESTS: dict[str, Callable[[Any], Callable[[Any, Any], bool]]] = {
     "below": _below,
     "increase": _increase,
     "decrease": _decrease,
+}
+_RATCHETS: dict[str, Callable[[Any, Any], Any]] = {
+    "increase": _follow_down,
+    "decrease": _follow_up,
 }
 
 
@@ -153,7 +212,7 @@ def parse(var: str | None, cond: Mapping[str, object]) -> Condition:
             "(held_for= is the one that combines), or watch a predicate for a compound condition"
         )
     kind = given[0]
-    target = _number(kind, cond[kind]) if kind in _NUMERIC else cond[kind]
+    target = _number(kind, cond[kind]) if kind in _NUMERIC else _equalable(var, kind, cond[kind])
     return Condition(kind, target, held_for)
 
 
@@ -221,6 +280,17 @@ def _number(kind: str, target: object) -> float:
         raise InvalidConditionError(
             f"{kind}= must be {what}, got {target!r} ({type(target).__name__}); "
             f"write e.g. {kind}={example}"
+        )
+    return target
+
+
+def _equalable(var: str, kind: str, target: object) -> object:
+    """Refuse a NaN target of ``value=``/``becomes=``: nothing ever equals it."""
+    if isinstance(target, Real) and math.isnan(target):
+        raise InvalidConditionError(
+            f"{kind}={target!r} can never fire: NaN equals nothing, not even NaN; to react to "
+            f"a NaN reading, watch a predicate: "
+            f"robot.whenever(lambda robot: math.isnan(robot.state[{var!r}]))"
         )
     return target
 

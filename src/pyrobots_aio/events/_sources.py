@@ -1,7 +1,8 @@
 """What feeds a monitor's trigger: writes of a key, or evaluations of a predicate.
 
 `KeySource` tests the condition synchronously on every write of its key
-(`StateStore.subscribe`), so a pulse that lasts one write is seen. A
+(`StateStore.subscribe`), so a pulse that lasts one write is seen; for
+``increase=``/``decrease=`` each write first moves the ratcheting reference. A
 `PredicateSource` evaluates the predicate inside `StateStore.track_reads` and
 watches exactly the keys it read last time; a sync predicate is evaluated
 inside the write, an async one in a task (re-evaluations that come while one
@@ -48,7 +49,7 @@ class _Failures:
 class KeySource:
     """Tests a key condition on every write of the key."""
 
-    __slots__ = ("_failures", "_key", "_observed", "_ref", "_relative", "_sub", "_test", "_trigger")
+    __slots__ = ("_failures", "_key", "_observed", "_ratchet", "_ref", "_sub", "_test", "_trigger")
 
     def __init__(
         self,
@@ -61,10 +62,10 @@ class KeySource:
         self._key = key
         self._test = condition.test()
         self._trigger = trigger
-        self._relative = condition.relative
+        self._ratchet = condition.ratchet()
         self._failures = _Failures(label)
         current = store[key]
-        self._ref: Any = current if self._relative else None
+        self._ref: Any = None  # the first reading that can serve sets it (in _holds)
         self._observed = False
         if condition.edge:
             trigger.prime(self._holds(current), current)
@@ -87,12 +88,12 @@ class KeySource:
     def _on_write(self, changes: Mapping[str, Any]) -> None:
         value = changes[self._key]
         self._observed = True
-        if self._relative and self._ref is None:  # the first value that can serve as reference
-            self._ref = value
         self._trigger.observe(self._holds(value), value)
 
     def _holds(self, value: Any) -> bool:
         try:
+            if self._ratchet is not None:
+                self._ref = self._ratchet(value, self._ref)
             holds = self._test(value, self._ref)
         except Exception:
             self._failures.failed(f"testing {value!r}")

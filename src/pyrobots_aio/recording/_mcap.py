@@ -63,7 +63,7 @@ def _writer_class() -> type[Writer]:
     except ImportError as exc:
         msg = (
             "McapRecorder needs the 'mcap' package, which is optional: "
-            'install it with pip install "pyrobots-aio[mcap]" (or pip install mcap), '
+            'install it with pip install mcap (or pip install -e ".[mcap]" in a checkout), '
             "or record with JsonlRecorder"
         )
         raise RecordingError(msg) from exc
@@ -73,7 +73,7 @@ def _writer_class() -> type[Writer]:
 class McapRecorder(Recorder):
     """Records a robot's events to an MCAP file that Foxglove opens.
 
-    Needs the ``mcap`` extra (``pip install "pyrobots-aio[mcap]"``); without it,
+    Needs the ``mcap`` extra (``pip install -e ".[mcap]"`` in a checkout); without it,
     creating one raises `RecordingError` naming the extra.
 
     Args:

@@ -1,6 +1,6 @@
 """The simulated robot: MuJoCo physics, SimRobot, and lockstep virtual time.
 
-Needs the ``sim`` extra (``pip install "pyrobots-aio[sim]"``). ``run(main)``
+Needs the ``sim`` extra (``pip install -e ".[sim]"`` in a checkout). ``run(main)``
 runs ``main`` on a virtual-time loop whose clock *is* simulation time.
 """
 

@@ -55,7 +55,7 @@ def _import_mujoco() -> ModuleType:
     except ImportError as err:
         raise SimulationUnavailableError(
             f"the simulated robot needs MuJoCo, which cannot be imported ({err}); "
-            'install it with: pip install "pyrobots-aio[sim]"'
+            'install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
         ) from err
     module: ModuleType = mujoco
     return module

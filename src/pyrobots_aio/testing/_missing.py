@@ -25,6 +25,12 @@ robot = _stand_in("robot")
 sim_robot = _stand_in("sim_robot")
 robot_events = _stand_in("robot_events")
 no_leaked_tasks = _stand_in("no_leaked_tasks")
+module_robot = _stand_in("module_robot")
+module_sim_robot = _stand_in("module_sim_robot")
+module_robot_events = _stand_in("module_robot_events")
+session_robot = _stand_in("session_robot")
+session_sim_robot = _stand_in("session_sim_robot")
+session_robot_events = _stand_in("session_robot_events")
 
 
 def pytest_runtest_setup(item: pytest.Item) -> None:

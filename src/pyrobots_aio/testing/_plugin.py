@@ -2,7 +2,8 @@
 
 Markers:
     virtual_time: run the async test on the virtual-time loop, where
-        ``asyncio.sleep(3600)`` returns at once with ``loop.time()`` 3600 s later.
+        ``asyncio.sleep(3600)`` returns at once with ``loop.time()`` 3600 s later
+        (the test is run by pytest-asyncio: ``@pytest.mark.asyncio``).
     allow_leaks: the leak checks below are skipped for this test.
 
 Fixtures:
@@ -12,11 +13,33 @@ Fixtures:
     robot_events: the `EventLog` of the robot fixture in use.
     no_leaked_tasks: fails the test if an asyncio task it started is still
         pending when it ends (use it, or make it autouse in your conftest).
+    module_robot, module_sim_robot, module_robot_events: one robot, and its
+        `EventLog`, for all the tests of a module, on the module's loop.
+    session_robot, session_sim_robot, session_robot_events: the same for the
+        whole session, on the session's loop.
 
-Once the ``robot``/``sim_robot`` fixture's robot has shut down, the fixture
-fails the test if a task started since the robot started is still pending (an
-action that ignored cancellation and was abandoned, a stray ``create_task``) or
-a resource is still held.
+Loop scopes: ``robot``, ``sim_robot`` and ``no_leaked_tasks`` are
+function-scoped and run on the loop of the test that uses them, whatever its
+scope (``@pytest.mark.asyncio(loop_scope="module")`` gets a fresh robot per
+test on the module's loop). The ``module_*`` and ``session_*`` robots live on
+the module's or the session's loop, so the tests using them are marked
+``@pytest.mark.asyncio(loop_scope="module")`` (or ``"session"``); a test on
+another loop fails with a message saying which mark to add.
+
+Event loops: only the tests that ask for virtual time (the marker, or a
+``*sim_robot`` fixture) get the virtual-time loop. The plugin answers
+pytest-asyncio's ``pytest_asyncio_loop_factories`` hook (first result wins)
+first for those, and not for the others, so a project's own loop stands: its
+own implementation of the hook (a hook of its own marked ``tryfirst`` would
+take virtual time's place too), or a uvloop event loop policy. When no plugin
+answers, tests get ``asyncio.new_event_loop()``, as without the hook.
+
+Once the robot fixtures' robot has shut down, the fixture fails the test if a
+task started since the robot started is still pending (an action that ignored
+cancellation and was abandoned, a stray ``create_task``) or a resource is still
+held. A test that asks for virtual time but that pytest-asyncio does not run
+(no ``@pytest.mark.asyncio`` in strict mode, or not ``async def``) fails with
+a message saying so.
 
 The fixtures and the marker need pytest-asyncio 1.4 or newer (its loop
 factories); without it, every other pytest run is untouched and a test that
@@ -30,7 +53,7 @@ import importlib.metadata
 import pytest
 
 REQUIRED = (1, 4)
-INSTALL = "pip install 'pyrobots-aio[testing]' (pytest-asyncio>=1.4)"
+INSTALL = 'pip install "pytest-asyncio>=1.4" (or pip install -e ".[testing]" in a checkout)'
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -45,6 +68,7 @@ def pytest_configure(config: pytest.Config) -> None:
         from . import _fixtures
 
         config.pluginmanager.register(_fixtures, "pyrobots_aio.fixtures")
+        config.pluginmanager.register(_fixtures.DefaultLoop(), "pyrobots_aio.default_loop")
     else:
         from . import _missing
 
