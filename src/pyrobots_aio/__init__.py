@@ -18,6 +18,7 @@ from ._exceptions import ActionError as ActionError
 from ._exceptions import ActionInterrupted as ActionInterrupted
 from ._exceptions import ActionSkipped as ActionSkipped
 from ._exceptions import CorruptRecordingError as CorruptRecordingError
+from ._exceptions import EventLoopError as EventLoopError
 from ._exceptions import InvalidConditionError as InvalidConditionError
 from ._exceptions import InvalidPoseError as InvalidPoseError
 from ._exceptions import InvalidResourceError as InvalidResourceError
@@ -76,6 +77,7 @@ __all__ = [
     "CompoundResource",
     "CorruptRecordingError",
     "EventKind",
+    "EventLoopError",
     "EventManager",
     "EventMonitor",
     "ExecEvent",

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import anyio
 import pytest
 
+from pyrobots_aio import EventLoopError
 from pyrobots_aio._core._clock import (
     VirtualTimeLoop,
     VirtualTimePolicy,
@@ -282,11 +283,25 @@ def test_run_refuses_to_nest_in_a_running_loop() -> None:
     async def outer() -> None:
         run(inner)
 
-    with pytest.raises(RuntimeError) as caught:
+    with pytest.raises(EventLoopError) as caught:  # a RuntimeError too
         run(outer)
+    assert isinstance(caught.value, RuntimeError)
     assert str(caught.value) == (
-        "run() cannot be called from a running event loop; await inner(...) there instead"
+        "pyrobots_aio.sim.run(inner) cannot run inside a running event loop: it runs inner on "
+        "a virtual-time loop of its own; from async code, run it in a thread: "
+        "await asyncio.to_thread(pyrobots_aio.sim.run, inner)"
     )
+
+
+def test_run_in_a_thread_from_a_running_app_works_as_the_error_says() -> None:
+    async def lockstep(hours: float) -> float:
+        await asyncio.sleep(hours * 3600)
+        return asyncio.get_running_loop().time()
+
+    async def app() -> float:
+        return await asyncio.to_thread(run, lockstep, 2)  # two simulated hours, in virtual time
+
+    assert asyncio.run(app()) == 7200.0
 
 
 def test_anyio_sleep_and_fail_after_run_in_virtual_time() -> None:

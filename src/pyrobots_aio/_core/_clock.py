@@ -35,6 +35,8 @@ import sys
 import warnings
 from typing import TYPE_CHECKING, Any, TypeVar, TypeVarTuple
 
+from .._exceptions import EventLoopError
+
 if TYPE_CHECKING:
     from collections import deque
     from collections.abc import Callable, Coroutine, Mapping
@@ -235,7 +237,8 @@ def run(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -> _T:
         What ``main`` returned.
 
     Raises:
-        RuntimeError: An event loop is already running in this thread.
+        EventLoopError: An event loop is already running in this thread (a
+            ``RuntimeError``); the message says to use ``asyncio.to_thread``.
 
     Example:
         >>> import asyncio
@@ -251,9 +254,12 @@ def run(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -> _T:
         with asyncio.Runner(loop_factory=new_virtual_loop) as runner:
             return runner.run(main(*args))
     name = getattr(main, "__name__", repr(main))
-    raise RuntimeError(
-        f"run() cannot be called from a running event loop; await {name}(...) there instead"
+    msg = (
+        f"pyrobots_aio.sim.run({name}) cannot run inside a running event loop: it runs "
+        f"{name} on a virtual-time loop of its own; from async code, run it in a thread: "
+        f"await asyncio.to_thread(pyrobots_aio.sim.run, {name})"
     )
+    raise EventLoopError(msg)
 
 
 def is_virtual(loop: asyncio.AbstractEventLoop | None = None) -> bool:
