@@ -22,8 +22,7 @@ async def test_watch_yields_each_change_in_order_and_ends_when_the_robot_stops()
         robot.state.docked = True
 
         async def consume() -> None:
-            async for value in robot.watch("docked"):
-                seen.append(value)
+            seen.extend([value async for value in robot.watch("docked")])
 
         consumer = asyncio.create_task(consume())
         await asyncio.sleep(0)

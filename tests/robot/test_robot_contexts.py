@@ -125,7 +125,8 @@ def test_a_robot_under_trio_says_it_needs_asyncio() -> None:
     with pytest.raises(EventLoopError) as caught:
         anyio.run(main, backend="trio")
     assert str(caught.value) == (
-        'cannot run Robot under trio: pyrobots_aio needs asyncio; use anyio.run(..., backend="asyncio")'
+        "cannot run Robot under trio: pyrobots_aio needs asyncio; "
+        'use anyio.run(..., backend="asyncio")'
     )
 
 
