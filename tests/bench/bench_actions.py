@@ -12,6 +12,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from pyrobots_aio import ActionCancelled, ActionHandle, Robot, action
@@ -21,6 +22,7 @@ LATENCY_N = 2_000
 SLEEPERS = 100_000
 CANCEL_ALL = (1_000, 10_000)
 WORK_N = 200_000
+INTROSPECTED = 1_000
 
 
 @action
@@ -195,10 +197,40 @@ def _p99(samples: list[int]) -> float:
     return float(ordered[int(0.99 * (len(ordered) - 1))])
 
 
+async def _introspection(robot: Robot) -> dict[str, float]:
+    """``robot.running()`` and the printed tree with 1,000 running actions (best of 50)."""
+    handles = [sleeper(robot) for _ in range(INTROSPECTED)]
+    await asyncio.sleep(0)
+    figures = {}
+    for name, call in (
+        ("running", robot.running),
+        ("action_tree", robot.action_tree),
+        ("running_with_locations", lambda: [info.location for info in robot.running()]),
+    ):
+        best = min(_timed(call) for _ in range(50))
+        figures[f"{name}_{INTROSPECTED}_ms"] = best * 1e3
+    await robot.cancel_all("bench")
+    assert all(h.done() for h in handles)
+    return figures
+
+
+def _timed(call: Callable[[], object]) -> float:
+    start = time.perf_counter()
+    call()
+    return time.perf_counter() - start
+
+
 async def _main() -> dict[str, float]:
     figures: dict[str, float] = {}
     async with Robot() as robot:
-        for part in (_python_work, _throughput, _cancel_latency, _cancel_all, _memory):
+        for part in (
+            _python_work,
+            _throughput,
+            _cancel_latency,
+            _cancel_all,
+            _introspection,
+            _memory,
+        ):
             figures.update(await part(robot))
     return figures
 
