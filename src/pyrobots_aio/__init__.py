@@ -12,6 +12,7 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 from ._core._instrument import EventKind as EventKind
 from ._core._instrument import ExecEvent as ExecEvent
 from ._core._instrument import Instrument as Instrument
+from ._exceptions import ActionAbandoned as ActionAbandoned
 from ._exceptions import ActionCancelled as ActionCancelled
 from ._exceptions import ActionDefinitionError as ActionDefinitionError
 from ._exceptions import ActionError as ActionError
@@ -64,6 +65,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Action",
+    "ActionAbandoned",
     "ActionCancelled",
     "ActionDefinitionError",
     "ActionError",

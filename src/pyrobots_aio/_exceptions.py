@@ -30,7 +30,9 @@ PyRobotsError
 ```
 
 `ActionCancelled` is not in this tree: it *is* `asyncio.CancelledError`
-(an alias), the exception that arrives inside a cancelled action.
+(an alias), the exception that arrives inside a cancelled action. Nor is
+`ActionAbandoned`, a ``BaseException`` thrown into the body of an action that
+ignored cancellation for two graces, to end it.
 """
 
 from __future__ import annotations
@@ -43,6 +45,16 @@ if TYPE_CHECKING:
 
 ActionCancelled = asyncio.CancelledError
 """Raised inside a cancelled action at its next ``await``; it *is* ``asyncio.CancelledError``."""
+
+
+class ActionAbandoned(BaseException):
+    """Thrown into the body of an action that ignored cancellation for two graces, to end it.
+
+    A ``BaseException``, as ``GeneratorExit`` is: ``except Exception`` and
+    ``except ActionCancelled`` let it through, so a body that swallows every
+    cancellation still ends, its ``finally`` blocks running. The action's
+    outcome is already CANCELLED; do not catch this.
+    """
 
 
 class PyRobotsError(Exception):

@@ -38,7 +38,7 @@ class Owner:
         self.awaiting: tuple[str, ...] = ()
         self.reasons: list[str | None] = []
         self._done = False
-        self._callbacks: list[Callable[[Owner], object]] = []
+        self._callbacks: list[Callable[[], None]] = []
 
     def cancel(self, reason: str | None = None) -> bool:
         if self._done:
@@ -49,13 +49,13 @@ class Owner:
     def done(self) -> bool:
         return self._done
 
-    def add_done_callback(self, callback: Callable[[Owner], object]) -> None:
-        self._callbacks.append(callback)
+    def add_finalizer(self, finalizer: Callable[[], None]) -> None:
+        self._callbacks.append(finalizer)
 
     def finish(self) -> None:
+        for finalizer in self._callbacks:
+            finalizer()
         self._done = True
-        for callback in self._callbacks:
-            callback(self)
 
     def __repr__(self) -> str:
         return f"<Owner {self.name}#{self.id}>"

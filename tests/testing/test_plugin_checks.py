@@ -51,7 +51,9 @@ def test_an_abandoned_action_fails_the_test_that_used_the_robot(pytester: pytest
         "no:logging",
     )
     result.assert_outcomes(passed=2, errors=1)
-    result.stdout.fnmatch_lines(["*tasks outlived the robot: [[]<Task * name='deaf#1'*"])
+    result.stdout.fnmatch_lines(
+        ["*actions ignored cancellation and were abandoned: [[]'deaf#1 at *test_*.py:*'[]]*"]
+    )
 
 
 def test_a_stray_task_fails_the_test_that_used_the_robot(pytester: pytest.Pytester) -> None:

@@ -20,6 +20,14 @@ time:
   threads started by other means (``anyio.to_thread``) are not counted and
   race virtual time.
 
+A loop that never waits never lets virtual time move: a task polling with
+``await asyncio.sleep(0)`` would freeze every timer, timeouts and the cancel
+watchdog included (a livelock real time does not have). So after `BUSY_LIMIT`
+iterations in a row without waiting, the loop says so once (a warning) and
+lets each further busy iteration take virtual time up to the next timer, as
+if the busy work took that long, until it waits again. This depends only on
+iteration counts, so it stays deterministic.
+
 Entry points: `run` (like ``asyncio.run``/``anyio.run``), `new_virtual_loop`
 (a ``loop_factory`` for ``asyncio.Runner``, ``anyio.run`` backend options and
 pytest-asyncio's ``pytest_asyncio_loop_factories`` hook) and
@@ -29,6 +37,7 @@ pytest-asyncio's ``pytest_asyncio_loop_factories`` hook) and
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 import selectors
 import sys
@@ -48,6 +57,10 @@ _T = TypeVar("_T")
 _Ts = TypeVarTuple("_Ts")
 
 _SelectResult = list[tuple[selectors.SelectorKey, int]]
+_log = logging.getLogger("pyrobots_aio.clock")
+
+BUSY_LIMIT = 100_000
+"""Iterations in a row without waiting after which virtual time moves anyway (see above)."""
 
 
 class _IdleSkippingSelector(selectors.BaseSelector):
@@ -59,9 +72,14 @@ class _IdleSkippingSelector(selectors.BaseSelector):
 
     def select(self, timeout: float | None = None) -> _SelectResult:
         ready = self._inner.select(0)
-        if ready or (timeout is not None and timeout <= 0):
+        if ready:
             return ready
-        if timeout is not None and self._loop._skip_to_next_timer():
+        loop = self._loop
+        if timeout is not None and timeout <= 0:  # callbacks are ready: a busy iteration
+            loop._busy_iteration()
+            return ready
+        loop._busy = 0
+        if timeout is not None and loop._skip_to_next_timer():
             return []
         return self._inner.select(None)
 
@@ -105,6 +123,8 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
     def __init__(self) -> None:
         self._now = 0.0
         self._thread_jobs = 0
+        self._busy = 0
+        self._busy_warned = False
         super().__init__(_IdleSkippingSelector(selectors.DefaultSelector(), self))
 
     def time(self) -> float:
@@ -178,6 +198,21 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
 
     def _thread_job_done(self, _future: asyncio.Future[Any]) -> None:
         self._thread_jobs -= 1
+
+    def _busy_iteration(self) -> None:
+        """Count an iteration that did not wait; past `BUSY_LIMIT`, let it take virtual time."""
+        self._busy += 1
+        if self._busy < BUSY_LIMIT:
+            return
+        if not self._busy_warned:
+            self._busy_warned = True
+            _log.warning(
+                "virtual time: the event loop ran %d iterations in a row without waiting (a "
+                "task polling with 'await asyncio.sleep(0)'?); from now on, while it stays "
+                "busy, each iteration lets virtual time reach the next timer",
+                BUSY_LIMIT,
+            )
+        self._skip_to_next_timer()
 
     def _skip_to_next_timer(self) -> bool:
         """Advance virtual time to the earliest timer; False if the loop must wait for real."""

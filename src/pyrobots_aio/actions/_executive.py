@@ -308,8 +308,8 @@ class Executive:
                 self._emit(EventKind.CANCEL_ESCALATED, handle, location=where)
             return
         self.log.error(
-            "action %s#%d ignored cancellation for %.3g s, at %s; abandoning it (its task may "
-            "outlive the robot)",
+            "action %s#%d ignored cancellation for %.3g s, at %s; abandoning it (its body is "
+            "ended; its resources stay held until its task ends)",
             handle.name,
             handle.id,
             2 * self.cancel_grace,
@@ -317,8 +317,7 @@ class Executive:
         )
         if self.instruments:
             self._emit(EventKind.ACTION_ABANDONED, handle, location=where)
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
-        handle._complete()
+        handle._abandon(2 * self.cancel_grace)
 
     def _cut_cleanup(self, handle: ActionHandle[Any], elapsed: float, *, warn: bool) -> None:
         """Cancel the cleanup actions ``handle`` started that outlast its grace.

@@ -18,7 +18,7 @@ import traceback
 import weakref
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
-from .._exceptions import ActionInterrupted, ActionSkipped
+from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
 from ._context import current_action
 from ._where import definition, location
 
@@ -297,7 +297,9 @@ class ActionHandle(Generic[T]):
         """Run ``finalizer()`` when the action ends, after its children, before it is done.
 
         The resources layer releases locks here, so a resource is held until the
-        action's cleanup and its children are over.
+        action's cleanup and its children are over. For an action the watchdog
+        abandoned, they run when its task really ends, not when it is declared
+        done: its resources stay held while its code may still drive them.
         """
         if self._finalizers is None:
             self._finalizers = []
@@ -345,6 +347,39 @@ class ActionHandle(Generic[T]):
         if self._phase == _RUNNING and self._task is not None:
             self._task.cancel(self._cancel_reason)
 
+    def _abandon(self, after: float) -> None:
+        """Declare the action done (CANCELLED), then end its body and its task.
+
+        `ActionAbandoned` (a ``BaseException``: ``except Exception`` and ``except
+        ActionCancelled`` let it through) is thrown into the body at its current
+        ``await``, and its task is cancelled, so that it ends and nothing (not
+        ``asyncio.run``) waits for it forever. A body that catches even that
+        runs on; its resources are released when its task has really ended.
+        """
+        task, body = self._task, self._coro
+        self._settle(Outcome.CANCELLED, error=self._interrupted())
+        self._complete(release=False)
+        if task is None or task.done() or body is None:
+            return
+        try:
+            body.throw(
+                ActionAbandoned(
+                    f"action {self.name}#{self.id} ignored cancellation for {after:.3g} s"
+                )
+            )
+        except BaseException:  # the body ended, as it should: its task is cancelled below
+            resisted = False
+        else:  # it caught even that, and awaits again
+            resisted = True
+        if resisted:
+            self._executive.log.error(
+                "action %s#%d resisted being abandoned (it catches BaseException); its task "
+                "and its resources live on until it ends",
+                self.name,
+                self.id,
+            )
+        task.cancel("abandoned: it ignored cancellation")
+
     def _interrupted(self, cause: BaseException | None = None) -> ActionInterrupted:
         error = ActionInterrupted(self, self._cancel_reason, self._cancel_by)
         error.__cause__ = cause
@@ -359,11 +394,16 @@ class ActionHandle(Generic[T]):
         self._value = value
         self._error = error
 
-    def _complete(self) -> None:
-        """Mark the action done and wake whoever waits for it (idempotent)."""
+    def _complete(self, *, release: bool = True) -> None:
+        """Mark the action done and wake whoever waits for it (idempotent).
+
+        With ``release`` False (an abandoned action) the finalizers wait for its
+        task to end.
+        """
         if self._phase == _DONE:
             return
-        self._run_finalizers()
+        if release:
+            self._run_finalizers()
         self._phase = _DONE
         self._coro = None
         self.finished_at = self._executive.loop.time()
@@ -431,6 +471,13 @@ class ActionHandle(Generic[T]):
 
 async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
     """Run an action's body in its own task, then wind it up (the task's coroutine)."""
+    try:
+        await _drive(handle, coro)
+    finally:  # an abandoned action releases its resources only now that its task ends
+        handle._run_finalizers()
+
+
+async def _drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
     current_action.set(handle)
     executive = handle._executive
     if handle._cancel_requested:  # cancelled before it ever ran: the body never starts
@@ -463,30 +510,35 @@ async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
 async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
     try:
         value = await coro
-    except asyncio.CancelledError:
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
-    except Exception as exc:
-        if isinstance(exc, ActionSkipped) and exc.handle is None:
-            # Its own lock request was refused. A skip that already names an action is a
-            # child's, re-raised by awaiting it: for this action, an ordinary failure.
-            exc.handle = handle
-            handle._settle(Outcome.SKIPPED, error=exc)
-        elif handle._cancel_requested:
-            handle._executive.log.warning(
-                "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
-            )
-            handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
-        else:
-            handle._settle(Outcome.FAILED, error=exc.with_traceback(_without_this_frame(exc)))
-    except BaseException as exc:  # KeyboardInterrupt, SystemExit: record, then let through
+    except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
         handle._settle(Outcome.FAILED, error=exc)
         handle._complete()
         raise
+    except BaseException as exc:
+        if handle._phase != _DONE:  # abandoned: how its body ends changes nothing
+            _settle_error(handle, exc)
     else:
         if handle._cancel_requested:  # cancellation swallowed: still CANCELLED
             handle._settle(Outcome.CANCELLED, value, handle._interrupted())
         else:
             handle._settle(Outcome.SUCCEEDED, value)
+
+
+def _settle_error(handle: ActionHandle[Any], exc: BaseException) -> None:
+    if isinstance(exc, asyncio.CancelledError):
+        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+    elif isinstance(exc, ActionSkipped) and exc.handle is None:
+        # Its own lock request was refused. A skip that already names an action is a
+        # child's, re-raised by awaiting it: for this action, an ordinary failure.
+        exc.handle = handle
+        handle._settle(Outcome.SKIPPED, error=exc)
+    elif handle._cancel_requested:
+        handle._executive.log.warning(
+            "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
+        )
+        handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
+    else:
+        handle._settle(Outcome.FAILED, error=exc.with_traceback(_without_this_frame(exc)))
 
 
 def _without_this_frame(error: BaseException) -> TracebackType | None:

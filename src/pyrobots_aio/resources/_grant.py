@@ -9,7 +9,7 @@ holder is that owner or one of its ancestors. Each leaf also keeps a
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from .._exceptions import LockUsageError
 from ._queue import WaitQueue
@@ -51,8 +51,8 @@ class Owner(Protocol):
     def done(self) -> bool:
         """Whether it is over; its resources are then released."""
 
-    def add_done_callback(self, callback: Callable[[Any], object]) -> None:
-        """Call ``callback(owner)`` once it is done (soon after, or at once)."""
+    def add_finalizer(self, finalizer: Callable[[], None]) -> None:
+        """Call ``finalizer()`` once it has really ended (abandoned: when its task ends)."""
 
 
 OwnerT = TypeVar("OwnerT", bound=Owner)
@@ -80,6 +80,13 @@ def descends(node: Owner | None, ancestor: Owner) -> bool:
 
 def who(owner: Owner) -> str:
     """``name#id``, as messages name an owner."""
+    return f"{owner.name}#{owner.id}"
+
+
+def holder(owner: Owner) -> str:
+    """How a holder is named: ``name#id``, marked if it is done but its task still holds on."""
+    if owner.done():  # abandoned by the watchdog: held until its task really ends
+        return f"{owner.name}#{owner.id} (abandoned, its task still running)"
     return f"{owner.name}#{owner.id}"
 
 

@@ -14,13 +14,25 @@ one waiter or a thousand.
 from __future__ import annotations
 
 import asyncio
+import functools
 import logging
 from typing import TYPE_CHECKING, Generic, NoReturn
 
 from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._exceptions import ActionSkipped, LockUsageError
 from . import _rules
-from ._grant import HELD, RELEASED, WAITING, Grant, Leaf, Owner, OwnerT, check_options, who
+from ._grant import (
+    HELD,
+    RELEASED,
+    WAITING,
+    Grant,
+    Leaf,
+    Owner,
+    OwnerT,
+    check_options,
+    holder,
+    who,
+)
 from ._resource import AnyResource, Resource, check_resource
 
 if TYPE_CHECKING:
@@ -180,7 +192,7 @@ class ResourceManager(Generic[OwnerT]):
 
     @staticmethod
     def _describe(state: Leaf[OwnerT]) -> str:
-        what = f"held by {who(state.holds[-1].owner)}" if state.holds else "free"
+        what = f"held by {holder(state.holds[-1].owner)}" if state.holds else "free"
         queued = [who(grant.owner) for grant in state.queue]
         if queued:
             more = f" and {len(queued) - 5} more" if len(queued) > 5 else ""
@@ -216,7 +228,7 @@ class ResourceManager(Generic[OwnerT]):
         record = self._owners.get(owner)
         if record is None:
             record = self._owners[owner] = _Record()
-            owner.add_done_callback(self._owner_done)
+            owner.add_finalizer(functools.partial(self._owner_done, owner))
         return record
 
     async def _wait(self, grant: Grant[OwnerT]) -> Grant[OwnerT]:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import pytest
 import pytest_asyncio
 
-from .. import Robot
+from .. import EventKind, Robot
 from ..sim import new_virtual_loop
 from ._events import EventLog
 
@@ -156,13 +156,20 @@ async def _tasks_left(before: set[asyncio.Task[object]]) -> list[asyncio.Task[ob
 
 
 @contextlib.asynccontextmanager
-async def _running_checked(robot: Robot, request: pytest.FixtureRequest) -> AsyncIterator[None]:
-    """Run ``robot``; once it has shut down, fail if a task or a lock outlived it."""
+async def _running_checked(
+    robot: Robot, request: pytest.FixtureRequest, log: EventLog
+) -> AsyncIterator[None]:
+    """Run ``robot``; once shut down, fail on an abandoned action, a leftover task or lock."""
     before = asyncio.all_tasks()
     async with robot:
         yield
     if request.node.get_closest_marker("allow_leaks"):
         return
+    abandoned = [
+        f"{event.name}#{event.action} at {event.data.get('location')}"
+        for event in log.of_kind(EventKind.ACTION_ABANDONED)
+    ]
+    assert not abandoned, f"actions ignored cancellation and were abandoned: {abandoned}"
     held = robot.resources.held()
     assert not held, f"locks outlived the robot: {robot.resources!r}"
     left = await _tasks_left(before)
@@ -186,8 +193,9 @@ def _robot_fixture(
     """An async fixture running a robot (with the `EventLog` of fixture ``log``)."""
 
     async def running(request: pytest.FixtureRequest) -> AsyncIterator[Robot]:
-        robot = _new_robot(sim, request.getfixturevalue(log))
-        async with _running_checked(robot, request):
+        events = request.getfixturevalue(log)
+        robot = _new_robot(sim, events)
+        async with _running_checked(robot, request, events):
             yield robot
 
     running.__doc__ = doc

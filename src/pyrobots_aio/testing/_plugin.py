@@ -34,10 +34,10 @@ own implementation of the hook (a hook of its own marked ``tryfirst`` would
 take virtual time's place too), or a uvloop event loop policy. When no plugin
 answers, tests get ``asyncio.new_event_loop()``, as without the hook.
 
-Once the robot fixtures' robot has shut down, the fixture fails the test if a
-task started since the robot started is still pending (an action that ignored
-cancellation and was abandoned, a stray ``create_task``) or a resource is still
-held. A test that asks for virtual time but that pytest-asyncio does not run
+Once the robot fixtures' robot has shut down, the fixture fails the test if an
+action ignored cancellation and was abandoned, if a task started since the
+robot started is still pending (a stray ``create_task``), or if a resource is
+still held. A test that asks for virtual time but that pytest-asyncio does not run
 (no ``@pytest.mark.asyncio`` in strict mode, or not ``async def``) fails with
 a message saying so.
 
