@@ -35,6 +35,8 @@ if TYPE_CHECKING:
 
     from pyrobots_aio import ExecEvent
 
+    from ._recorder import Pose2D
+
 _log = logging.getLogger("pyrobots_aio.recording")
 
 
@@ -120,8 +122,10 @@ class JsonlRecorder(Recorder):
 
     Args:
         path: The file to write (replaced if it exists).
-        state_keys: State keys to sample (see `Recorder`).
-        sample_rate: Most samples per second and numeric key (None: every change).
+        state_keys: State keys to sample (None: every key; see `Recorder`).
+        sample_rate: None (default): every change; a number downsamples numbers
+            and the pose to at most that many samples per second.
+        pose_frame: The frame whose pose in ``map`` is recorded (None: none).
         metadata: Free JSON-friendly facts for the header.
         buffer_size: Events buffered before a write.
         flush_interval: Loop seconds after which buffered events are written anyway.
@@ -147,8 +151,9 @@ class JsonlRecorder(Recorder):
         self,
         path: str | os.PathLike[str],
         *,
-        state_keys: Iterable[str] = (),
-        sample_rate: float | None = 10.0,
+        state_keys: Iterable[str] | None = None,
+        sample_rate: float | None = None,
+        pose_frame: str | None = "base_link",
         metadata: Mapping[str, object] | None = None,
         buffer_size: int = 1000,
         flush_interval: float = 1.0,
@@ -159,7 +164,9 @@ class JsonlRecorder(Recorder):
         if not flush_interval > 0:
             msg = f"flush_interval must be a positive number of seconds, got {flush_interval!r}"
             raise ValueError(msg)
-        super().__init__(state_keys=state_keys, sample_rate=sample_rate, metadata=metadata)
+        super().__init__(
+            state_keys=state_keys, sample_rate=sample_rate, pose_frame=pose_frame, metadata=metadata
+        )
         self.path = os.fspath(path)
         self.buffer_size = buffer_size
         self.flush_interval = float(flush_interval)
@@ -188,6 +195,20 @@ class JsonlRecorder(Recorder):
         self._last_time = event.time
         if len(lines) == 1:
             self._first_pending(event.time)
+        if len(lines) >= self.buffer_size:
+            self._write()
+
+    def _take_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+        """One sample line: the state values written at ``time`` and the pose."""
+        if self._batch:  # keep the order of events
+            self._encode_batch()
+        state = _encode_data(values) if values else "{}"
+        tail = "}\n" if pose is None else f',"pose":[{pose[0]!r},{pose[1]!r},{pose[2]!r}]}}\n'
+        lines = self._lines
+        lines.append(f'{{"t":{time!r},"state":{state}{tail}')
+        self._last_time = time
+        if len(lines) == 1:
+            self._first_pending(time)
         if len(lines) >= self.buffer_size:
             self._write()
 
