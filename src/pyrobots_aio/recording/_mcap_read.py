@@ -27,7 +27,7 @@ from ._recording import (
 if TYPE_CHECKING:
     from collections.abc import Iterator
 
-    from mcap.records import Channel, McapRecord, Message, Metadata, Schema
+    from mcap.records import Channel, McapRecord, Message, Metadata
 
 CHUNK_LIMIT = 256 * 1024 * 1024
 """Largest chunk (uncompressed bytes) read; `McapRecorder` writes chunks of about 1 MiB."""

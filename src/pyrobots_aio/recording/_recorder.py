@@ -29,7 +29,6 @@ if TYPE_CHECKING:
 _log = logging.getLogger("pyrobots_aio.recording")
 
 
-
 def _loop_time() -> float | None:
     try:
         return asyncio.get_running_loop().time()

@@ -141,7 +141,8 @@ class Summary:
         records: Events in the recording (state samples included).
         actions: Actions spawned.
         outcomes: How they ended.
-        actions_per_minute: Actions spawned in each minute of the run.
+        actions_per_minute: Actions spawned in each minute of the run (at most
+            `MAX_BUCKETS` minutes: the last one counts the rest).
         mean_actions_per_minute: ``actions`` over the duration in minutes.
         events_per_minute: Monitor firings in each minute of the run.
         mean_events_per_minute: Firings over the duration in minutes.
@@ -180,12 +181,21 @@ class Summary:
     abandoned: int = 0
 
 
+MAX_BUCKETS = 10_000
+"""Most buckets a series holds (a week of minutes): memory follows the events, not the span."""
+
+
 def per_bucket(times: Iterable[float], start: float, duration: float, width: float) -> list[int]:
-    """Count ``times`` in consecutive buckets of ``width`` seconds from ``start``."""
-    counts = [0] * max(1, math.ceil(duration / width))
+    """Count ``times`` in consecutive buckets of ``width`` seconds from ``start``.
+
+    At most `MAX_BUCKETS` buckets: times past the last one are counted in it.
+    """
+    buckets = duration / width if width > 0 else 0.0
+    counts = [0] * (min(MAX_BUCKETS, max(1, math.ceil(buckets))) if math.isfinite(buckets) else 1)
     last = len(counts) - 1
     for time in times:
-        counts[min(last, max(0, int((time - start) // width)))] += 1
+        index = (time - start) // width if width > 0 else 0.0
+        counts[int(min(last, max(0.0, index))) if math.isfinite(index) else last] += 1
     return counts
 
 
@@ -256,7 +266,7 @@ def summarize(recording: Recording) -> Summary:
         seed=header.seed,
         duration=duration,
         complete=recording.complete,
-        records=len(recording.events),
+        records=len(recording.events) + recording.state_samples,
         actions=len(spans),
         outcomes=Outcomes.count(s.outcome for s in spans),
         actions_per_minute=tuple(per_bucket((s.spawned for s in spans), start, duration, MINUTE)),
@@ -272,7 +282,7 @@ def summarize(recording: Recording) -> Summary:
         cancellations=tuple(_cancellations(found, start)),
         failures=tuple(failures),
         monitor_firings=dict(sorted(firings.items())),
-        state_samples=found.samples,
+        state_samples=recording.state_samples,
         escalations=found.escalations,
         abandoned=found.abandoned,
     )

@@ -297,7 +297,7 @@ class FoxgloveChannels:
         return messages
 
     def log(
-        self, time: float, level: int, name: str, text: str, file: str = "", line: int = 0
+        self, time: float, level: int, name: str, text: str, *, file: str = "", line: int = 0
     ) -> Message:
         """A ``foxglove.Log`` line."""
         stamp = self.stamp(time)
@@ -341,7 +341,8 @@ class LogForwarder(logging.Handler):
             text = record.getMessage()
         except (TypeError, ValueError):
             text = str(record.msg)
+        level = log_level(record.levelno)
         message = self._channels.log(
-            now, log_level(record.levelno), record.name, text, record.pathname, record.lineno
+            now, level, record.name, text, file=record.pathname, line=record.lineno
         )
         self._send(message)

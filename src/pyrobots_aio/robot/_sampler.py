@@ -127,7 +127,9 @@ class StateSampler:
         pose = (float(matrix[0, 3]), float(matrix[1, 3]))
         pose += (math.atan2(float(matrix[1, 0]), float(matrix[0, 0])),)
         old = self._pose
-        still = old is not None and all(abs(a - b) < POSE_EPSILON for a, b in zip(old, pose))
+        still = old is not None and all(
+            abs(a - b) < POSE_EPSILON for a, b in zip(old, pose, strict=True)
+        )
         if still or not all(math.isfinite(c) for c in pose):
             return None
         self._pose, self._pose_stamp = pose, now

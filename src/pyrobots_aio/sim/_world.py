@@ -430,7 +430,10 @@ class SimWorld:
             x, y, _ = data.geom_xpos[geom].tolist()
             rot = data.geom_xmat[geom]
             shape: dict[str, Any] = {"name": name, "kind": kind, "x": x, "y": y}
-            shape.update(yaw=math.atan2(float(rot[3]), float(rot[0])), rgba=[round(float(c), 3) for c in rgba])
+            shape.update(
+                yaw=math.atan2(float(rot[3]), float(rot[0])),
+                rgba=[round(float(c), 3) for c in rgba],
+            )
             size = model.geom_size[geom]
             if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX:
                 shape.update(shape="box", half=[float(size[0]), float(size[1])])
