@@ -22,11 +22,12 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
-import math
 import os
 from typing import IO, TYPE_CHECKING, Any
 
 from pyrobots_aio import EventKind
+from pyrobots_aio.robot.channels import finite as _finite
+from pyrobots_aio.robot.channels import jsonable as _jsonable
 
 from ._recorder import Recorder
 
@@ -38,32 +39,6 @@ if TYPE_CHECKING:
     from ._recorder import Pose2D
 
 _log = logging.getLogger("pyrobots_aio.recording")
-
-
-def _jsonable(value: object) -> object:
-    """Make what ``json`` cannot encode encodable: numpy values, sets, anything else by repr."""
-    tolist = getattr(value, "tolist", None)  # numpy arrays and scalars
-    if callable(tolist):
-        return tolist()
-    if isinstance(value, set | frozenset | tuple):
-        return list(value)
-    return repr(value)
-
-
-def _finite(value: object) -> object:
-    """``value`` with each non-finite float (NaN, Infinity) replaced by None, for strict JSON."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if value is None or isinstance(value, str | int):
-        return value
-    if isinstance(value, dict):
-        return {
-            repr(k) if isinstance(k, float) and not math.isfinite(k) else k: _finite(v)
-            for k, v in value.items()
-        }
-    if isinstance(value, list | tuple):
-        return [_finite(v) for v in value]
-    return _finite(_jsonable(value))
 
 
 def _strict(encode: Callable[[Any], str]) -> Callable[[Any], str]:

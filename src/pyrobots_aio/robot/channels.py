@@ -36,7 +36,31 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from .._core._instrument import ExecEvent
-    from ._sampler import Pose2D
+    from .sampling import Pose2D
+
+__all__ = [
+    "ACTIONS",
+    "EVENT",
+    "FIXED_CHANNELS",
+    "FOXGLOVE_LOG",
+    "FRAME_TRANSFORMS",
+    "LOG",
+    "MONITORS",
+    "POSE",
+    "POSE_IN_FRAME",
+    "RESOURCES",
+    "SAMPLE",
+    "SCHEMAS",
+    "STATE_PREFIX",
+    "TF",
+    "FoxgloveChannels",
+    "LogForwarder",
+    "Message",
+    "finite",
+    "jsonable",
+    "log_level",
+    "strict_json",
+]
 
 ACTIONS, RESOURCES, MONITORS = "/pyrobots/actions", "/pyrobots/resources", "/pyrobots/monitors"
 STATE_PREFIX = "/pyrobots/state/"

@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     from ..state import Subscription
     from ._robot import Robot
 
+__all__ = ["POSE_EPSILON", "Pose2D", "StateSampler"]
+
 Pose2D = tuple[float, float, float]
 """``(x, y, yaw)`` in the map frame (metres, radians)."""
 _MISSING = object()
