@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
     from pyrobots_aio import ExecEvent
 
-    from ._recorder import Pose2D
+    from pyrobots_aio.robot.sampling import Pose2D
 
 _log = logging.getLogger("pyrobots_aio.recording")
 

@@ -45,8 +45,9 @@ class Mark:
 
 
 def _number(value: object) -> float | None:
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    return float(value) if ok else None
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
 
 
 def _shape(raw: Mapping[str, Any]) -> dict[str, Any] | None:
@@ -73,8 +74,9 @@ def _shape(raw: Mapping[str, Any]) -> dict[str, Any] | None:
         return None
     rgba = raw.get("rgba")
     values = [_number(v) for v in rgba] if isinstance(rgba, list) and len(rgba) == 4 else []
-    if len(values) == 4 and all(v is not None for v in values):
-        r, g, b = (round(255 * min(1.0, max(0.0, v))) for v in values[:3])  # type: ignore[type-var]
+    channels = [v for v in values[:3] if v is not None]
+    if len(values) == 4 and len(channels) == 3:
+        r, g, b = (round(255 * min(1.0, max(0.0, v))) for v in channels)
         shape["fill"] = f"#{r:02x}{g:02x}{b:02x}"
     return shape
 

@@ -263,7 +263,7 @@ class SeriesBuilder:
         for key in sorted(self._times):
             values: Sequence[object] = self._values[key]
             if all(_number(v) for v in values):
-                values = array("d", values)  # type: ignore[arg-type]
+                values = array("d", [float(v) for v in values])  # type: ignore[arg-type]
             series[key] = Series(key, self._times[key], values)
         times, x, y, yaw = self._pose
         return series, PoseTrack(pose_frame or "base_link", times, x, y, yaw)
@@ -295,7 +295,7 @@ def event_from_json(obj: object) -> ExecEvent:
 
 def _time(obj: Mapping[str, Any]) -> float:
     t = obj.get("t")
-    if not _number(t):
+    if not isinstance(t, int | float) or isinstance(t, bool):
         raise _Bad(f"'t' must be a number (the loop time), got {t!r}")
     return float(t)
 

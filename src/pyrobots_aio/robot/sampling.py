@@ -126,8 +126,8 @@ class StateSampler:
             matrix = robot.poses.get_transform(self.pose_frame)
         except UnknownFrameError:
             return None
-        pose = (float(matrix[0, 3]), float(matrix[1, 3]))
-        pose += (math.atan2(float(matrix[1, 0]), float(matrix[0, 0])),)
+        yaw = math.atan2(float(matrix[1, 0]), float(matrix[0, 0]))
+        pose = (float(matrix[0, 3]), float(matrix[1, 3]), yaw)
         old = self._pose
         still = old is not None and all(
             abs(a - b) < POSE_EPSILON for a, b in zip(old, pose, strict=True)
