@@ -128,22 +128,19 @@ async def test_the_file_is_one_json_object_per_line(
     header, first, end = lines[0], lines[1], lines[-1]
     assert header["format"] == FORMAT
     assert header["version"] == VERSION
-    assert {k: header[k] for k in ("robot", "seed", "t0", "state_keys", "sample_rate")} == {
+    keys = ("robot", "seed", "t0", "state_keys", "sample_rate", "pose_frame", "floor_plan")
+    assert {k: header[k] for k in keys} == {
         "robot": "Robot",
         "seed": None,
         "t0": 0.0,
         "state_keys": ["bumper"],
-        "sample_rate": 10.0,
+        "sample_rate": None,
+        "pose_frame": None,  # a plain Robot has no base_link frame
+        "floor_plan": [],
     }
     assert header["metadata"] == {"run": 7}
     assert header["created"].endswith("+00:00")
-    assert first == {
-        "t": 0.0,
-        "kind": "state.sample",
-        "action": None,
-        "name": "bumper",
-        "data": {"value": False},
-    }
+    assert first == {"t": 0.0, "state": {"bumper": False}}
     assert end == {"end": 5.5, "events": 49}
     assert len(lines) == 51
 
