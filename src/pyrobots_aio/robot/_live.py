@@ -3,8 +3,10 @@
 The live view publishes the channels of the MCAP recorder (`channels`): the
 executive's events, each state key at each write, the pose, ``/tf`` and log
 lines, through Foxglove's own SDK (the ``live`` extra, ``foxglove-sdk``), on
-127.0.0.1 unless told otherwise. It runs from ``async with robot`` to its end:
-the SDK's server threads are native (Rust) and are stopped with the robot.
+127.0.0.1 unless told otherwise. It runs from ``async with robot`` to its end,
+when its server is stopped and its port closed. (The SDK serves from one
+runtime of native threads per process, shared by every server, idle once they
+stop, shut down by the SDK at exit: no Python thread, and none more per robot.)
 Only the state writes and events of the robot's loop thread are published, in
 that thread; publishing costs a JSON encoding and a queue push per message.
 """
