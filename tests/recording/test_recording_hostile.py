@@ -104,7 +104,7 @@ def test_hostile_strings_in_every_field_stay_text(tmp_path: Path) -> None:
             assert not [name for name in attrs if name.startswith("on") or name == "src"], tag
             assert CLASS.match(attrs.get("class") or "x"), (tag, attrs)
             style = attrs.get("style") or ""
-            assert "alert" not in style and "script" not in style, (tag, style)
+            assert not re.search("alert|script", style), (tag, style)
         assert "<script>alert" not in page
         assert HOSTILE not in page  # only ever escaped
 

@@ -134,7 +134,8 @@ async def test_each_robot_stops_its_server_and_leaves_no_thread() -> None:
 @pytest.mark.asyncio
 async def test_a_plain_robot_streams_its_state() -> None:
     async with Robot(serve=0) as robot:
-        assert robot.live is not None and robot.live.port is not None
+        assert robot.live is not None
+        assert robot.live.port is not None
         url = f"ws://127.0.0.1:{robot.live.port}"
         async with websockets.connect(url, subprotocols=[PROTOCOL]) as ws:
             client = FoxgloveClient(ws)

@@ -35,7 +35,6 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Mapping
 
     from pyrobots_aio import ExecEvent
-
     from pyrobots_aio.robot.sampling import Pose2D
 
 _log = logging.getLogger("pyrobots_aio.recording")
