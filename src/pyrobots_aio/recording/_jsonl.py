@@ -148,6 +148,7 @@ class JsonlRecorder(Recorder):
         self._batch: list[ExecEvent] = []  # action events not yet encoded
         self._batch_size = min(BATCH, buffer_size)
         self._lines: list[str] = []  # encoded, not yet written
+        self._keys: dict[str, str] = {}  # each state key's JSON, with its colon
         self._timer: asyncio.TimerHandle | None = None
         # For each batched kind and action name: the data of its last event and its line end.
         self._ends: dict[EventKind, dict[str | None, tuple[Mapping[str, object], str]]] = {
@@ -176,7 +177,7 @@ class JsonlRecorder(Recorder):
         """One sample line: the state values written at ``time`` and the pose."""
         if self._batch:  # keep the order of events
             self._encode_batch()
-        state = _encode_data(values) if values else "{}"
+        state = self._state(values) if values else "{}"
         tail = "}\n" if pose is None else f',"pose":[{pose[0]!r},{pose[1]!r},{pose[2]!r}]}}\n'
         lines = self._lines
         lines.append(f'{{"t":{time!r},"state":{state}{tail}')
@@ -185,6 +186,21 @@ class JsonlRecorder(Recorder):
             self._first_pending(time)
         if len(lines) >= self.buffer_size:
             self._write()
+
+    def _state(self, values: dict[str, object]) -> str:
+        """``values`` as a JSON object: finite floats and booleans directly (most sensors)."""
+        keys, parts = self._keys, []
+        for key, value in values.items():
+            name = keys.get(key)
+            if name is None:
+                name = keys[key] = _encode(key) + ":"
+            if type(value) is float and value - value == 0.0:  # a finite float
+                parts.append(f"{name}{value!r}")
+            elif type(value) is bool:
+                parts.append(name + ("true" if value else "false"))
+            else:
+                parts.append(name + _encode_data({"": value})[4:-1])
+        return "{" + ",".join(parts) + "}"
 
     def _batched(self, time: float) -> None:
         """The batch just got its first event, or is full."""

@@ -29,15 +29,8 @@ POSE_EPSILON = 1e-9
 """A pose that moved less than this (metres and radians) is not sampled again."""
 
 
-def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def _same(old: object, new: object) -> bool:
-    """Whether a sample would repeat the last one (only plain scalars are compared)."""
-    if type(old) is not type(new) or not isinstance(new, bool | int | float | str | None):
-        return False
-    return old == new
+_SCALARS = frozenset({bool, int, float, str, type(None)})
+"""Types whose equal values are the same sample (others, numpy arrays ..., always count)."""
 
 
 class StateSampler:
@@ -108,9 +101,11 @@ class StateSampler:
                 continue
             old = values.get(key, _MISSING)
             if old is not _MISSING:
-                if _same(old, value):
-                    continue
-                if period and _is_number(value) and now - stamps[key] < period:
+                kind = type(value)
+                if kind is type(old) and kind in _SCALARS and old == value:
+                    continue  # the same sample again
+                number = kind is not bool and isinstance(value, int | float)
+                if period and number and now - stamps[key] < period:
                     continue
             values[key] = value
             stamps[key] = now
@@ -126,13 +121,17 @@ class StateSampler:
             matrix = robot.poses.get_transform(self.pose_frame)
         except UnknownFrameError:
             return None
-        yaw = math.atan2(float(matrix[1, 0]), float(matrix[0, 0]))
-        pose = (float(matrix[0, 3]), float(matrix[1, 3]), yaw)
+        (r0, _, _, x), (r1, _, _, y) = matrix[:2].tolist()
+        yaw = math.atan2(r1, r0)
         old = self._pose
-        still = old is not None and all(
-            abs(a - b) < POSE_EPSILON for a, b in zip(old, pose, strict=True)
-        )
-        if still or not all(math.isfinite(c) for c in pose):
+        if old is not None and (
+            abs(old[0] - x) < POSE_EPSILON
+            and abs(old[1] - y) < POSE_EPSILON
+            and abs(old[2] - yaw) < POSE_EPSILON
+        ):
+            return None  # still
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
             return None
-        self._pose, self._pose_stamp = pose, now
+        pose = self._pose = (x, y, yaw)
+        self._pose_stamp = now
         return pose
