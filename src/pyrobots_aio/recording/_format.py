@@ -61,8 +61,12 @@ def _overview(summary: Summary) -> list[str]:
     state = "closed cleanly" if summary.complete else "NOT closed (incomplete)"
     o = summary.outcomes
     peak_at = f" at {summary.peak_time:.3f} s" if summary.peak_time is not None else ""
+    sampled = ""
+    if summary.state_samples or summary.poses:
+        sampled = f" ({summary.state_samples} state samples, {summary.poses} poses)"
     return [
-        f"{robot}{seed}: {summary.duration:.3f} s recorded, {summary.records} events, {state}",
+        f"{robot}{seed}: {summary.duration:.3f} s recorded, {summary.records} events{sampled}, "
+        f"{state}",
         f"  actions            {summary.actions}: {o.succeeded} succeeded, {o.failed} failed, "
         f"{o.cancelled} cancelled, {o.skipped} skipped, {o.not_done} not done",
         f"  actions per minute {summary.mean_actions_per_minute:.1f} mean; "

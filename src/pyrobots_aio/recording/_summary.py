@@ -138,7 +138,7 @@ class Summary:
         seed: Its seed, if known.
         duration: Seconds recorded.
         complete: Whether the recording was closed properly and read without error.
-        records: Events in the recording (state samples included).
+        records: Executive events in the recording (state samples and poses not included).
         actions: Actions spawned.
         outcomes: How they ended.
         actions_per_minute: Actions spawned in each minute of the run (at most
@@ -153,7 +153,8 @@ class Summary:
         cancellations: Every cancellation request, in order.
         failures: Every failed action, in order.
         monitor_firings: Firings per monitor name.
-        state_samples: State samples recorded.
+        state_samples: State values recorded (every key).
+        poses: Poses recorded.
         escalations: Cancellations repeated after an action overran its grace.
         abandoned: Actions abandoned after ignoring cancellation.
     """
@@ -177,6 +178,7 @@ class Summary:
     failures: tuple[Failure, ...]
     monitor_firings: Mapping[str, int] = field(default_factory=dict)
     state_samples: int = 0
+    poses: int = 0
     escalations: int = 0
     abandoned: int = 0
 
@@ -266,7 +268,7 @@ def summarize(recording: Recording) -> Summary:
         seed=header.seed,
         duration=duration,
         complete=recording.complete,
-        records=len(recording.events) + recording.state_samples,
+        records=len(recording.events),
         actions=len(spans),
         outcomes=Outcomes.count(s.outcome for s in spans),
         actions_per_minute=tuple(per_bucket((s.spawned for s in spans), start, duration, MINUTE)),
@@ -283,6 +285,7 @@ def summarize(recording: Recording) -> Summary:
         failures=tuple(failures),
         monitor_firings=dict(sorted(firings.items())),
         state_samples=recording.state_samples,
+        poses=len(recording.poses),
         escalations=found.escalations,
         abandoned=found.abandoned,
     )
