@@ -52,7 +52,7 @@ async def test_the_summary_counts_what_the_scenario_did(
         5.5,
         True,
     )
-    assert summary.records == 49
+    assert (summary.records, summary.state_samples, summary.poses) == (46, 3, 0)
     assert summary.actions == 9
     assert summary.outcomes == Outcomes(succeeded=5, failed=1, cancelled=2, skipped=1)
     assert summary.actions_per_minute == (9,)
@@ -166,7 +166,7 @@ async def test_the_summary_reads_as_a_table(tmp_path: Path, record_scenario: Sce
     await record_scenario(JsonlRecorder(path, state_keys=["bumper"]))
     text = format_summary(summarize(load(path)))
     assert text.splitlines()[:5] == [
-        "Robot: 5.500 s recorded, 49 events, closed cleanly",
+        "Robot: 5.500 s recorded, 46 events (3 state samples, 0 poses), closed cleanly",
         "  actions            9: 5 succeeded, 1 failed, 2 cancelled, 1 skipped, 0 not done",
         "  actions per minute 98.2 mean; by minute: 9",
         "  events per minute  10.9 mean (monitor firings); by minute: 1",
