@@ -9,10 +9,9 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from pyrobots_aio import Resource, Robot, action, lock
 from pyrobots_aio.cli import main
 from pyrobots_aio.recording import JsonlRecorder, McapRecorder
-from pyrobots_aio.sim import run
+from pyrobots_aio.sim import SimRobot, run
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -96,39 +95,27 @@ def test_replay_of_something_else_fails_cleanly(tmp_path: Path) -> None:
 
 
 def test_replay_of_an_mcap_file_gives_the_same_summary_and_page(tmp_path: Path) -> None:
-    run(_record_both, tmp_path / "greet.mcap", tmp_path / "greet.jsonl")
-    assert (tmp_path / "greet.mcap").read_bytes().startswith(b"\x89MCAP0\r\n")
-    mcap = _cli("replay", str(tmp_path / "greet.mcap"), "--timeline", str(tmp_path / "m.html"))
-    jsonl = _cli("replay", str(tmp_path / "greet.jsonl"), "--timeline", str(tmp_path / "j.html"))
+    run(_record_both, tmp_path / "walk.mcap", tmp_path / "walk.jsonl")
+    assert (tmp_path / "walk.mcap").read_bytes().startswith(b"\x89MCAP0\r\n")
+    mcap = _cli("replay", str(tmp_path / "walk.mcap"), "--timeline", str(tmp_path / "m.html"))
+    jsonl = _cli("replay", str(tmp_path / "walk.jsonl"), "--timeline", str(tmp_path / "j.html"))
     assert (mcap.returncode, mcap.stderr, jsonl.returncode, jsonl.stderr) == (0, "", 0, "")
     assert mcap.stdout.splitlines()[:-1] == jsonl.stdout.splitlines()[:-1]
-    assert mcap.stdout.splitlines()[:16] == SUMMARY
+    assert mcap.stdout.startswith("SimRobot, seed 5: ")
+    assert "rotate_angle#3 cancelled: bored" in mcap.stdout
     pages = [(tmp_path / name).read_text() for name in ("m.html", "j.html")]
-    assert pages[0].replace("greet.mcap", "greet.jsonl") == pages[1]
-
-
-@action
-@lock(Resource("arm"))
-async def wave(robot: Robot, seconds: float) -> None:
-    await robot.sleep(seconds)
-
-
-@action
-async def greet(robot: Robot) -> None:
-    await wave(robot, 1.0)
-    await wave(robot, 2.0)
+    assert pages[0].replace("walk.mcap", "walk.jsonl") == pages[1]
 
 
 async def _record_both(mcap: Path, jsonl: Path) -> None:
-    """The run of conftest's recording, to MCAP and JSON Lines at once."""
-    robot = Robot()
+    robot = SimRobot(seed=5)
     with McapRecorder(mcap).attach(robot), JsonlRecorder(jsonl).attach(robot):
         async with robot:
-            await greet(robot)
-            last = wave(robot, 10.0)
+            await robot.undock()
+            turn = robot.rotate_angle(3.0)
             await robot.sleep(1.0)
-            last.cancel("bored")
-            await last.wait_done()
+            turn.cancel("bored")
+            await turn.wait_done()
 
 
 def test_replay_refuses_to_write_the_page_over_the_recording(recording: Path) -> None:
