@@ -48,6 +48,29 @@ BROWSER_HELP = (
 GREEN, ORANGE, RED = (0x43, 0xA0, 0x47), (0xFB, 0x8C, 0x00), (0xE5, 0x39, 0x35)
 DOCK, BUMP = (0x33, 0x33, 0x38), (0xD5, 0x00, 0x00)
 PROBE = """<script>
+function hover(map) {
+  // Move the mouse over the first bump mark, then over the timeline at that mark's time.
+  var mark = map.querySelector("path.mark.bump"), t = +mark.dataset.t;
+  var timeline = document.querySelector("svg.timeline"), cursor = timeline.querySelector(".cursor");
+  var at = mark.getBoundingClientRect(), here = map.querySelector(".here");
+  map.dispatchEvent(new MouseEvent("mousemove", {
+    clientX: at.left + at.width / 2, clientY: at.top + at.height / 2, bubbles: true
+  }));
+  var fromMap = {cursor: +cursor.getAttribute("x1"), shown: cursor.style.display !== "none"};
+  here.setAttribute("cx", "-99");
+  var point = timeline.createSVGPoint();
+  point.x = +timeline.dataset.x0 + t / +timeline.dataset.duration * +timeline.dataset.w;
+  point.y = 60;
+  var screen = point.matrixTransform(timeline.getScreenCTM());
+  timeline.dispatchEvent(new MouseEvent("mousemove", {
+    clientX: screen.x, clientY: screen.y, bubbles: true
+  }));
+  var box = here.getBoundingClientRect();
+  return {
+    t: t, cursor: fromMap.cursor, shown: fromMap.shown, expected: point.x,
+    here: [box.left + box.width / 2 - at.left - at.width / 2, box.top + box.height / 2 - at.top - at.height / 2]
+  };
+}
 window.addEventListener("load", function () {
   var map = document.querySelector("svg.map"), box = map.querySelector("g.trail").getBBox();
   var k = +map.dataset.scale, ox = +map.dataset.ox, oy = +map.dataset.oy;
@@ -60,7 +83,8 @@ window.addEventListener("load", function () {
     trail: count("svg.map polyline.trail"), shapes: count("svg.map .shape"),
     dock: count("svg.map .shape.dock"), bumps: count("svg.map path.mark.bump"),
     marks: count("svg.map path.mark"), plots: count("svg.timeline polyline.plot"),
-    pulses: count("svg.timeline rect.plot.bool"), actions: count("svg.timeline rect.action")
+    pulses: count("svg.timeline rect.plot.bool"), actions: count("svg.timeline rect.action"),
+    hover: hover(map)
   });
   document.body.appendChild(out);
 });
@@ -223,6 +247,14 @@ def test_the_map_path_and_plots_are_drawn_where_the_robot_went(tmp_path: Path) -
     assert probe["x"][1] == pytest.approx(max(poses.x), abs=slack)
     assert probe["y"][0] == pytest.approx(min(poses.y), abs=slack)
     assert probe["y"][1] == pytest.approx(max(poses.y), abs=slack)
+
+    # Hover links both ways: the mark's place on the map shows its time on the timeline,
+    # and its time on the timeline puts the map's "here" circle on the mark.
+    hover = probe["hover"]
+    assert hover["shown"]
+    assert hover["cursor"] == pytest.approx(hover["expected"], abs=2.0)  # pixels of the timeline
+    assert abs(hover["here"][0]) < 3
+    assert abs(hover["here"][1]) < 3
 
     shot = tmp_path / "walk.png"
     _browse(page, tmp_path / "profile-shot", f"--screenshot={shot}")

@@ -11,7 +11,10 @@ costs a fraction of a millisecond, and a crash loses at most that much.
 Measured on the action benchmark (tests/bench/bench_recording.py), recording
 costs the executive about 1.8x, of which about 1.45x is the instrumentation
 hook itself (a no-op instrument) and most of the rest turning loop times
-into text (``repr`` of a float).
+into text (``repr`` of a float). On the lockstep random walk, recording every
+sensor key and the pose at 50 Hz costs about 1.4x: a sample line is built by
+hand from its finite floats and booleans (their ``repr``), other values go
+through the JSON encoder.
 
 The lines are strict JSON: a non-finite float (NaN, Infinity), which JSON
 cannot write, is recorded as null.

@@ -56,7 +56,6 @@ HOLD_COLOURS = (
     "#8e24aa",  # purple
     "#546e7a",  # blue grey
     "#827717",  # olive
-    "#ad1457",  # raspberry
     "#283593",  # navy
 )
 """Colours of resource holds by holder: none near the outcome colours (green, red, orange)."""
