@@ -68,7 +68,10 @@ function hover(map) {
   var box = here.getBoundingClientRect();
   return {
     t: t, cursor: fromMap.cursor, shown: fromMap.shown, expected: point.x,
-    here: [box.left + box.width / 2 - at.left - at.width / 2, box.top + box.height / 2 - at.top - at.height / 2]
+    here: [
+      box.left + box.width / 2 - at.left - at.width / 2,
+      box.top + box.height / 2 - at.top - at.height / 2
+    ]
   };
 }
 window.addEventListener("load", function () {
