@@ -35,6 +35,7 @@ GOALS: dict[str, tuple[str, Callable[[float], bool]]] = {
     "idle_cpu_s_per_s_1000_monitors": ("~0", lambda v: v <= 0.005),
     "random_walk_realtime_factor": (">= 100x", lambda v: v >= 100),
     "recording_throughput_ratio": ("<= 2x", lambda v: v <= 2),
+    "walk_recording_overhead_ratio": ("<= 1.5x no recording", lambda v: v <= 1.5),
 }
 
 

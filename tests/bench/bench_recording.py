@@ -1,10 +1,18 @@
-"""What recording costs the executive (issue 7: at most 2x on action start+finish throughput).
+"""What recording costs (issue 7: at most 2x on action throughput; issue 14: at most 1.5x
+on the lockstep random walk).
 
-``run()`` measures sequential start+finish of no-op actions on a plain robot,
-without a recorder and with a `JsonlRecorder` writing to a real file, in this
-same run; rounds alternate and each figure keeps its best round. Times are the
-thread's CPU time (``time.thread_time``), so that other processes on a shared
-machine weigh less on the ratio.
+``run()`` measures, in this same run, with rounds alternating and each figure
+keeping its best round:
+
+- sequential start+finish of no-op actions on a plain robot, without a
+  recorder and with a `JsonlRecorder` writing to a real file;
+- the lockstep random walk of a `SimRobot` (`WALK_SECONDS` simulated), without
+  a recorder, with a `JsonlRecorder` recording every sensor key and the pose at
+  the control rate (50 Hz) and every executive event, and with a `McapRecorder`
+  doing the same (informative).
+
+Times are the thread's CPU time (``time.thread_time``), so that other
+processes on a shared machine weigh less on the ratios.
 """
 
 from __future__ import annotations
@@ -13,12 +21,23 @@ import asyncio
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pyrobots_aio import Robot, action
-from pyrobots_aio.recording import JsonlRecorder, load
+from pyrobots_aio.recording import JsonlRecorder, McapRecorder, load
+from pyrobots_aio.sim import SimRobot
+from pyrobots_aio.sim import run as lockstep
+from pyrobots_aio.sim.random_walk import random_walk
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from pyrobots_aio.recording import Recorder
 
 N = 20_000
 ROUNDS = 5
+WALK_SECONDS = 120.0
+WALK_ROUNDS = 5
 
 
 @action
@@ -46,6 +65,40 @@ def _recorded(path: Path) -> float:
         return asyncio.run(_actions(robot))
 
 
+async def _walk(recorder: Recorder | None) -> float:
+    robot = SimRobot(seed=1)
+    if recorder is not None:
+        recorder.attach(robot)
+    try:
+        start = time.thread_time()
+        async with robot:
+            await random_walk(robot, duration=WALK_SECONDS, seed=1)
+        return time.thread_time() - start
+    finally:
+        if recorder is not None:
+            recorder.close()
+
+
+def _walks(tmp: Path) -> dict[str, float]:
+    makers: dict[str, Callable[[], Recorder | None]] = {
+        "bare": lambda: None,
+        "jsonl": lambda: JsonlRecorder(tmp / "walk.jsonl"),
+        "mcap": lambda: McapRecorder(tmp / "walk.mcap"),
+    }
+    best = dict.fromkeys(makers, float("inf"))
+    for _ in range(WALK_ROUNDS):
+        for name, make in makers.items():
+            best[name] = min(best[name], lockstep(_walk, make()))
+    recording = load(tmp / "walk.jsonl")
+    return {
+        "walk_recording_overhead_ratio": best["jsonl"] / best["bare"],
+        "walk_mcap_overhead_ratio": best["mcap"] / best["bare"],
+        "walk_realtime_factor_recorded": WALK_SECONDS / best["jsonl"],
+        "walk_recorded_samples_per_sim_s": recording.state_samples / recording.duration,
+        "walk_recorded_bytes_per_sim_s": (tmp / "walk.jsonl").stat().st_size / recording.duration,
+    }
+
+
 def run() -> dict[str, float]:
     bare, recorded = [], []
     with tempfile.TemporaryDirectory() as tmp:
@@ -55,8 +108,9 @@ def run() -> dict[str, float]:
             recorded.append(_recorded(path))
         events = len(load(path).events)
         size = path.stat().st_size
+        walks = _walks(Path(tmp))
     assert events == 3 * (N + 200), events
-    return {
+    return walks | {
         "recording_throughput_ratio": min(recorded) / min(bare),
         "actions_per_s_recorded": N / min(recorded),
         "actions_per_s_unrecorded": N / min(bare),

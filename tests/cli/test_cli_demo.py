@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from pyrobots_aio import EventKind
 from pyrobots_aio.cli import main
 from pyrobots_aio.recording import format_summary, load, summarize
 
@@ -56,8 +55,11 @@ def test_the_demo_runs_records_and_summarises(
     assert summary.actions > 20
     assert {s.name for s in summary.per_action} >= {"undock", "move", "rotate_angle", "dock"}
     assert [r.name for r in summary.resources] == ["wheels"]
-    samples = {e.name for e in recording.events if e.kind is EventKind.STATE_SAMPLE}
-    assert samples == {"bumper", "bumper_left", "bumper_right", "docked", "v", "w"}
+    sensors = {"bumper", "docked", "v", "w", "battery", "ir_front_left", "cliff_front_left"}
+    assert sensors <= set(recording.samples)  # every sensor key, and the pose
+    ticks = round(summary.duration * 50) + 1
+    assert len(recording.samples["v"]) > ticks / 2  # at the control rate while moving
+    assert len(recording.poses) > ticks / 2
     for cancel in summary.cancellations:  # every bump is explained
         assert cancel.by_name is not None
         assert cancel.by_name.startswith("bumper_reflex#")

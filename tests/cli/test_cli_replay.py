@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from typing import TYPE_CHECKING
 
 import pytest
 
-from pyrobots_aio import Robot
 from pyrobots_aio.cli import main
-from pyrobots_aio.recording import McapRecorder
-from pyrobots_aio.sim import run
+from pyrobots_aio.recording import JsonlRecorder, McapRecorder
+from pyrobots_aio.sim import SimRobot, run
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -94,24 +94,60 @@ def test_replay_of_something_else_fails_cleanly(tmp_path: Path) -> None:
     )
 
 
-def test_replay_of_an_mcap_file_says_what_it_reads(tmp_path: Path) -> None:
-    path = tmp_path / "run.mcap"
-    run(_record_mcap, path)
-    assert path.read_bytes().startswith(b"\x89MCAP0\r\n")
-    done = _cli("replay", str(path))
-    assert (done.returncode, done.stdout) == (1, "")
-    assert done.stderr == (
-        f"pyrobots-aio: error: {path} is an MCAP file (McapRecorder: open it in Foxglove); "
-        "pyrobots-aio replay and load() read JSON Lines recordings: record one with "
-        "JsonlRecorder, or with pyrobots-aio demo random-walk --record PATH.jsonl\n"
-    )
+def test_replay_of_an_mcap_file_gives_the_same_summary_and_page(tmp_path: Path) -> None:
+    run(_record_both, tmp_path / "walk.mcap", tmp_path / "walk.jsonl")
+    assert (tmp_path / "walk.mcap").read_bytes().startswith(b"\x89MCAP0\r\n")
+    mcap = _cli("replay", str(tmp_path / "walk.mcap"), "--timeline", str(tmp_path / "m.html"))
+    jsonl = _cli("replay", str(tmp_path / "walk.jsonl"), "--timeline", str(tmp_path / "j.html"))
+    assert (mcap.returncode, mcap.stderr, jsonl.returncode, jsonl.stderr) == (0, "", 0, "")
+    assert mcap.stdout.splitlines()[:-1] == jsonl.stdout.splitlines()[:-1]
+    assert mcap.stdout.startswith("SimRobot, seed 5: ")
+    assert "rotate_angle#3 cancelled: bored" in mcap.stdout
+    pages = [(tmp_path / name).read_text() for name in ("m.html", "j.html")]
+    assert pages[0].replace("walk.mcap", "walk.jsonl") == pages[1]
 
 
-async def _record_mcap(path: Path) -> None:
-    robot = Robot()
-    with McapRecorder(path).attach(robot):
+async def _record_both(mcap: Path, jsonl: Path) -> None:
+    robot = SimRobot(seed=5)
+    with McapRecorder(mcap).attach(robot), JsonlRecorder(jsonl).attach(robot):
         async with robot:
+            await robot.undock()
+            turn = robot.rotate_angle(3.0)
             await robot.sleep(1.0)
+            turn.cancel("bored")
+            await turn.wait_done()
+
+
+def test_replay_refuses_to_write_the_page_over_the_recording(recording: Path) -> None:
+    before = recording.read_bytes()
+    link = recording.with_name("link.html")
+    link.symlink_to(recording)
+    for target in (str(recording), f"{recording.parent}/./{recording.name}", str(link)):
+        done = _cli("replay", str(recording), "--timeline", target)
+        assert (done.returncode, done.stdout) == (2, "")
+        assert done.stderr == (
+            f"pyrobots-aio: error: --timeline {target} names the recording itself; writing the "
+            "page there would destroy it: choose another file, e.g. run.html\n"
+        )
+    assert recording.read_bytes() == before
+
+
+def test_replay_prints_no_terminal_escape_from_a_recording(tmp_path: Path) -> None:
+    evil = "\x1b]0;owned\x07\x1b[2J\x1b[31m"
+    path = tmp_path / "evil.jsonl"
+    lines = [
+        {"format": "pyrobots_aio.recording", "version": 1, "t0": 0.0, "robot": evil},
+        {"t": 0.0, "action": 1, "kind": "action.spawned", "name": evil, "data": {}},
+        {"t": 1.0, "action": 1, "kind": "action.finished", "name": evil, "data": {"error": evil}},
+        {"t": 1.0, "kind": evil},
+    ]
+    path.write_text("".join(json.dumps(line) + "\n" for line in lines))
+    done = _cli("replay", str(path))
+    assert done.returncode == 1
+    assert "\x1b" not in done.stdout + done.stderr
+    assert "\x07" not in done.stdout + done.stderr
+    assert "\\x1b]0;owned\\x07" in done.stdout
+    assert "unknown event kind" in done.stderr
 
 
 @pytest.mark.parametrize(

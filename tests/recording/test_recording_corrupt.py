@@ -87,7 +87,7 @@ def test_a_recording_cut_between_lines_is_incomplete_but_not_corrupt(tmp_path: P
             '{"t": 1.0, "kind": "action.started", "data": [1]}\n',
             "'data' must be an object, got [1]",
         ),
-        ('{"end": 3.0, "events": 2}\n', "end record counts 2 events but 4 were read before it"),
+        ('{"end": 3.0, "events": 2}\n', "end record counts 2 records but 4 were read before it"),
         (b"\xff\xfe\n", "not UTF-8 text (byte 1 of the line)"),
     ],
 )
@@ -140,12 +140,12 @@ def test_what_is_not_a_recording_is_refused_whatever_the_mode(tmp_path: Path) ->
 
 def test_a_newer_format_asks_for_an_upgrade(tmp_path: Path) -> None:
     path = tmp_path / "future.jsonl"
-    path.write_text('{"format": "pyrobots_aio.recording", "version": 2}\n')
+    path.write_text('{"format": "pyrobots_aio.recording", "version": 3}\n')
     with pytest.raises(RecordingError) as info:
         load(path, strict=False)
     assert type(info.value) is RecordingError
     assert str(info.value) == (
-        f"{path}: recorded in format version 2; this pyrobots_aio reads version 1: "
+        f"{path}: recorded in format version 3; this pyrobots_aio reads versions up to 2: "
         "upgrade pyrobots-aio to read it"
     )
 

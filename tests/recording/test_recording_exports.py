@@ -27,14 +27,17 @@ def test_exported_names_are_pinned() -> None:
         "McapRecorder",
         "MemoryRecorder",
         "Outcomes",
+        "PoseTrack",
         "Recorder",
         "Recording",
         "RecordingHeader",
         "ResourceStats",
+        "Series",
         "Summary",
         "format_summary",
         "load",
         "render_timeline_html",
+        "shown",
         "summarize",
     ]
     assert pyrobots_aio.cli.__all__ == ["ConsoleHandler", "install_console_handler", "main"]
@@ -69,6 +72,8 @@ def test_only_the_public_api_below_is_used(package: str) -> None:
     [
         "recording._format",
         "recording._jsonl",
+        "recording._map",
+        "recording._mcap",
         "recording._recorder",
         "recording._recording",
         "recording._summary",

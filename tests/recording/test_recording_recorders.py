@@ -12,11 +12,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from pyrobots_aio import EventKind, RecordingError, Robot, action
+from pyrobots_aio import RecordingError, Robot, action
 from pyrobots_aio.recording import JsonlRecorder, MemoryRecorder, load
 
 if TYPE_CHECKING:
     from pathlib import Path
+
+    from pyrobots_aio.recording import Recording
 
 
 @action
@@ -24,12 +26,14 @@ async def nap(robot: Robot, seconds: float) -> None:
     await robot.sleep(seconds)
 
 
-def _samples(recorder: MemoryRecorder) -> list[tuple[float, str | None, object]]:
-    return [
-        (round(e.time, 6), e.name, e.data["value"])
-        for e in recorder.events
-        if e.kind is EventKind.STATE_SAMPLE
+def _samples(recording: Recording) -> list[tuple[float, str, object]]:
+    """Every sample, by time then key."""
+    found = [
+        (round(t, 6), key, value)
+        for key, series in recording.samples.items()
+        for t, value in zip(series.times, series.values, strict=True)
     ]
+    return sorted(found, key=lambda s: (s[0], s[1]))
 
 
 @pytest.mark.virtual_time
@@ -44,9 +48,10 @@ async def test_numbers_are_rate_limited_and_discrete_values_never_missed() -> No
                 robot.state.update(v=tick / 10, bumper=tick == 3)
             await robot.sleep(0.02)
             robot.state.v = 1.0  # the same value again: not a new sample
-    assert _samples(recorder) == [
-        (0.0, "v", 0.0),  # the values present at attach
-        (0.0, "bumper", False),
+    assert recorder.events == []  # samples are not executive events
+    assert _samples(recorder.recording()) == [
+        (0.0, "bumper", False),  # the values present at attach
+        (0.0, "v", 0.0),
         (0.06, "bumper", True),
         (0.08, "bumper", False),
         (0.1, "v", 0.5),
@@ -63,7 +68,7 @@ async def test_without_a_sample_rate_every_change_is_recorded() -> None:
             for value in (0.1, 0.2, 0.2, 0.3):
                 robot.state.v = value
                 robot.state.w = value  # not sampled
-    assert _samples(recorder) == [(0.0, "v", 0.1), (0.0, "v", 0.2), (0.0, "v", 0.3)]
+    assert _samples(recorder.recording()) == [(0.0, "v", 0.1), (0.0, "v", 0.2), (0.0, "v", 0.3)]
 
 
 @pytest.mark.virtual_time
@@ -74,8 +79,8 @@ async def test_numpy_values_are_written_as_json(tmp_path: Path) -> None:
     with JsonlRecorder(path, state_keys=["ranges", "speed", "tags"]).attach(robot):
         async with robot:
             robot.state.update(ranges=np.array([0.5, 1.0]), speed=np.float64(0.25), tags={"a"})
-    values = {e.name: e.data["value"] for e in load(path).events}
-    assert values == {"ranges": [0.5, 1.0], "speed": 0.25, "tags": ["a"]}
+    values = {key: list(s.values) for key, s in load(path).samples.items()}
+    assert values == {"ranges": [[0.5, 1.0]], "speed": [0.25], "tags": [["a"]]}
 
 
 @pytest.mark.virtual_time
@@ -97,10 +102,10 @@ async def test_lines_are_strict_json_non_finite_floats_null(tmp_path: Path) -> N
     assert [json.loads(line, parse_constant=refuse) for line in lines]  # every line parses
     recording = load(path)
     assert recording.header.metadata == {"gain": None}
-    assert [(e.name, e.data["value"]) for e in recording.events] == [
+    assert [(key, value) for _, key, value in _samples(recording)] == [
+        ("pose", {"x": None, "y": [1e-300, None]}),
         ("range", None),
         ("ranges", [0.1 + 0.2, None]),  # finite values come back exactly
-        ("pose", {"x": None, "y": [1e-300, None]}),
         ("range", 1 / 3),
     ]
 
@@ -121,13 +126,15 @@ async def test_a_sample_keeps_the_value_it_had_among_batched_action_events(
             seen.append(2)  # changed in place: no new sample, and the recorded one stays [1]
             await handle
             robot.state.seen = [1, 2, 3]
-    assert [(e.kind.value, e.time, e.data.get("value")) for e in load(path).events] == [
+    lines = [json.loads(line) for line in path.read_text().splitlines()[1:-1]]
+    assert [(line.get("kind", "sample"), line["t"], line.get("state")) for line in lines] == [
         ("action.spawned", 0.0, None),
         ("action.started", 0.0, None),
-        ("state.sample", 0.5, [1]),
+        ("sample", 0.5, {"seen": [1]}),
         ("action.finished", 1.0, None),
-        ("state.sample", 1.0, [1, 2, 3]),
+        ("sample", 1.0, {"seen": [1, 2, 3]}),
     ]
+    assert _samples(load(path)) == [(0.5, "seen", [1]), (1.0, "seen", [1, 2, 3])]
 
 
 @pytest.mark.virtual_time

@@ -52,7 +52,7 @@ async def test_the_summary_counts_what_the_scenario_did(
         5.5,
         True,
     )
-    assert summary.records == 49
+    assert (summary.records, summary.state_samples, summary.poses) == (46, 3, 0)
     assert summary.actions == 9
     assert summary.outcomes == Outcomes(succeeded=5, failed=1, cancelled=2, skipped=1)
     assert summary.actions_per_minute == (9,)
@@ -128,22 +128,19 @@ async def test_the_file_is_one_json_object_per_line(
     header, first, end = lines[0], lines[1], lines[-1]
     assert header["format"] == FORMAT
     assert header["version"] == VERSION
-    assert {k: header[k] for k in ("robot", "seed", "t0", "state_keys", "sample_rate")} == {
+    keys = ("robot", "seed", "t0", "state_keys", "sample_rate", "pose_frame", "floor_plan")
+    assert {k: header[k] for k in keys} == {
         "robot": "Robot",
         "seed": None,
         "t0": 0.0,
         "state_keys": ["bumper"],
-        "sample_rate": 10.0,
+        "sample_rate": None,
+        "pose_frame": None,  # a plain Robot has no base_link frame
+        "floor_plan": [],
     }
     assert header["metadata"] == {"run": 7}
     assert header["created"].endswith("+00:00")
-    assert first == {
-        "t": 0.0,
-        "kind": "state.sample",
-        "action": None,
-        "name": "bumper",
-        "data": {"value": False},
-    }
+    assert first == {"t": 0.0, "state": {"bumper": False}}
     assert end == {"end": 5.5, "events": 49}
     assert len(lines) == 51
 
@@ -169,7 +166,7 @@ async def test_the_summary_reads_as_a_table(tmp_path: Path, record_scenario: Sce
     await record_scenario(JsonlRecorder(path, state_keys=["bumper"]))
     text = format_summary(summarize(load(path)))
     assert text.splitlines()[:5] == [
-        "Robot: 5.500 s recorded, 49 events, closed cleanly",
+        "Robot: 5.500 s recorded, 46 events (3 state samples, 0 poses), closed cleanly",
         "  actions            9: 5 succeeded, 1 failed, 2 cancelled, 1 skipped, 0 not done",
         "  actions per minute 98.2 mean; by minute: 9",
         "  events per minute  10.9 mean (monitor firings); by minute: 1",

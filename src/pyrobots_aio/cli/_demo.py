@@ -2,9 +2,11 @@
 
 Lockstep virtual time by default (`pyrobots_aio.sim.run`: as fast as the CPU
 allows), or ``--realtime`` on an ordinary loop. While it runs: a live block on
-a terminal, one line per notable event otherwise. At the end: the walk's
-report and the summary of its recording (the file of ``--record``, else an
-in-memory recording).
+a terminal, one line per notable event otherwise, and with ``--serve`` a live
+view in Foxglove. At the end: the walk's report and the summary of its
+recording (the file of ``--record``, JSON Lines or MCAP by its extension, else
+an in-memory recording). Every state key and the pose are recorded at the
+control rate.
 """
 
 from __future__ import annotations
@@ -13,9 +15,17 @@ import argparse
 import asyncio
 import contextlib
 import time
+from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
-from pyrobots_aio.recording import JsonlRecorder, MemoryRecorder, format_summary, load, summarize
+from pyrobots_aio.recording import (
+    JsonlRecorder,
+    McapRecorder,
+    MemoryRecorder,
+    format_summary,
+    load,
+    summarize,
+)
 
 from ._live import EventLines, LiveStatus, Tally
 
@@ -29,8 +39,10 @@ if TYPE_CHECKING:
 
     from ._console import ConsoleHandler
 
-RECORDED_STATE = ("bumper", "bumper_left", "bumper_right", "docked", "v", "w")
-"""The state keys the demo samples into its recording."""
+RECORDERS = {".jsonl": JsonlRecorder, ".mcap": McapRecorder}
+"""The recorder each ``--record`` extension picks."""
+DEFAULT_PORT = 8765
+"""The port of ``--serve`` without a number (Foxglove's default)."""
 DEFAULT_MOVES = 10
 """Moves made when no ``--duration`` is given."""
 
@@ -43,6 +55,29 @@ def positive_seconds(text: str) -> float:
         value = float("nan")
     if not 0 < value < float("inf"):
         msg = f"expected a positive number of seconds, got {text!r}"
+        raise argparse.ArgumentTypeError(msg)
+    return value
+
+
+def recording_path(text: str) -> str:
+    """Argparse type: a recording file whose extension names a known format."""
+    if Path(text).suffix.lower() not in RECORDERS:
+        msg = (
+            f"cannot tell the format of {text!r} from its extension: "
+            f"use {' or '.join(RECORDERS)} (JSON Lines or MCAP)"
+        )
+        raise argparse.ArgumentTypeError(msg)
+    return text
+
+
+def port_number(text: str) -> int:
+    """Argparse type: a TCP port number (0: any free port)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= 65535:
+        msg = f"expected a TCP port number from 0 to 65535, got {text!r}"
         raise argparse.ArgumentTypeError(msg)
     return value
 
@@ -69,7 +104,22 @@ def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
         help="follow the wall clock (default: lockstep, as fast as possible); undocking, "
         "driving out and docking alone take about 20 s",
     )
-    walk.add_argument("--record", metavar="PATH", help="record the run to this JSON Lines file")
+    walk.add_argument(
+        "--record",
+        metavar="PATH",
+        type=recording_path,
+        help="record the run (every state key and the pose at the control rate) to this file: "
+        "PATH.jsonl for JSON Lines, PATH.mcap for MCAP (Foxglove; the mcap extra)",
+    )
+    walk.add_argument(
+        "--serve",
+        metavar="PORT",
+        nargs="?",
+        const=DEFAULT_PORT,
+        type=port_number,
+        help="stream the run live over Foxglove's WebSocket protocol on 127.0.0.1:PORT "
+        f"(default {DEFAULT_PORT}; the live extra); use it with --realtime to watch it",
+    )
     walk.add_argument(
         "--seed", type=int, default=0, help="seeds the sensors and the moves (default: 0)"
     )
@@ -120,12 +170,13 @@ class _Show:
             self.handler.stream = self._saved
 
 
-def _recorder(options: argparse.Namespace) -> JsonlRecorder | MemoryRecorder:
-    if options.record:
-        return JsonlRecorder(
-            options.record, state_keys=RECORDED_STATE, metadata={"demo": "random-walk"}
-        )
-    return MemoryRecorder(state_keys=RECORDED_STATE, metadata={"demo": "random-walk"})
+def _recorder(options: argparse.Namespace) -> Recorder:
+    metadata = {"demo": "random-walk"}
+    if not options.record:
+        return MemoryRecorder(metadata=metadata)
+    if Path(options.record).suffix.lower() == ".mcap":
+        return McapRecorder(options.record, metadata=metadata, logs=True)
+    return JsonlRecorder(options.record, metadata=metadata)
 
 
 def _walk(
@@ -137,7 +188,7 @@ def _walk(
     moves = 0 if options.duration is not None else DEFAULT_MOVES
 
     async def main() -> WalkReport:
-        robot = SimRobot(seed=options.seed, realtime=options.realtime)
+        robot = SimRobot(seed=options.seed, realtime=options.realtime, serve=options.serve)
         show.attach(robot)
         with recorder.attach(robot):
             async with robot, show.showing(robot):
@@ -175,7 +226,9 @@ def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> in
     wall = time.perf_counter() - show.wall_start
     print(_report(report, wall, realtime=options.realtime), file=out)
     recording: Recording
-    recording = load(recorder.path) if isinstance(recorder, JsonlRecorder) else recorder.recording()
+    recording = (
+        recorder.recording() if isinstance(recorder, MemoryRecorder) else load(options.record)
+    )
     print("", format_summary(summarize(recording)), sep="\n", file=out)
     if options.record:
         replay = f"pyrobots-aio replay {options.record} --timeline run.html"

@@ -1,7 +1,10 @@
-"""``pyrobots-aio replay PATH [--timeline OUT.html]``: summarise a recording, draw its timeline.
+"""``pyrobots-aio replay PATH [--timeline OUT.html]``: summarise a recording, draw its page.
 
-A corrupt or truncated recording is still summarised up to the bad line; the
-error, naming that line, follows the summary and the exit code is 1.
+JSON Lines and MCAP recordings give the same summary and page. A corrupt or
+truncated recording is still summarised up to the bad line; the error, naming
+that line, follows the summary and the exit code is 1. The recording is
+untrusted input: its strings are printed with control characters escaped,
+and ``--timeline`` may not name the recording itself.
 """
 
 from __future__ import annotations
@@ -11,7 +14,13 @@ from pathlib import Path
 from typing import TextIO
 
 from pyrobots_aio import RecordingError
-from pyrobots_aio.recording import format_summary, load, render_timeline_html, summarize
+from pyrobots_aio.recording import (
+    format_summary,
+    load,
+    render_timeline_html,
+    shown,
+    summarize,
+)
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -19,28 +28,39 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     replay = commands.add_parser(
         "replay",
         help="summarise a recording and draw its timeline",
-        description="Print the summary of a JSON Lines recording (actions and events per "
-        "minute, peak concurrency, durations per action, resource use, cancellations) and, "
-        "with --timeline, write its timeline as a self-contained HTML page. An action's "
+        description="Print the summary of a recording, JSON Lines or MCAP (actions and events "
+        "per minute, peak concurrency, durations per action, resource use, cancellations) and, "
+        "with --timeline, write its page: the map of the arena with the robot's path, the "
+        "timeline of actions and resources, and plots of the sensors, as one self-contained "
+        "HTML file. An action's "
         "duration runs from its start (action.started) to its end, so it includes any wait "
         "for a resource.",
     )
     replay.add_argument(
         "path",
         metavar="PATH",
-        help="a JSON Lines recording (pyrobots-aio demo random-walk --record PATH.jsonl, "
-        "JsonlRecorder)",
+        help="a recording: JSON Lines or MCAP (pyrobots-aio demo random-walk --record "
+        "PATH.jsonl or PATH.mcap; JsonlRecorder, McapRecorder)",
     )
-    replay.add_argument("--timeline", metavar="OUT.html", help="write the timeline page here")
+    replay.add_argument(
+        "--timeline", metavar="OUT.html", help="write the page (map, timeline, plots) here"
+    )
     replay.set_defaults(command=run_replay)
 
 
 def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run ``replay``; return the exit code."""
+    if options.timeline and _same_file(options.path, options.timeline):
+        print(
+            f"pyrobots-aio: error: --timeline {options.timeline} names the recording itself; "
+            "writing the page there would destroy it: choose another file, e.g. run.html",
+            file=err,
+        )
+        return 2
     try:
         recording = load(options.path, strict=False)
     except RecordingError as exc:
-        print(f"pyrobots-aio: error: {exc}", file=err)
+        print(f"pyrobots-aio: error: {shown(exc)}", file=err)
         return 1
     except OSError as exc:
         print(f"pyrobots-aio: error: cannot read {options.path}: {exc.strerror}", file=err)
@@ -55,9 +75,19 @@ def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         print(f"\ntimeline written to {options.timeline}", file=out)
     if recording.error is not None:
         print(
-            f"pyrobots-aio: error: {recording.error}\n"
+            f"pyrobots-aio: error: {shown(recording.error)}\n"
             f"(the summary covers the {len(recording.events)} events before that line)",
             file=err,
         )
         return 1
     return 0
+
+
+def _same_file(recording: str, page: str) -> bool:
+    """Whether ``page`` is the file ``recording`` (the same path, a link to it ...)."""
+    try:
+        return Path(recording).resolve() == Path(page).resolve() or (
+            Path(page).exists() and Path(recording).samefile(page)
+        )
+    except OSError:
+        return False

@@ -5,26 +5,32 @@ Layer: on top; uses only the public API of ``pyrobots_aio``.
 Record a run, then read it back::
 
     robot = SimRobot(seed=1)
-    with JsonlRecorder("run.jsonl", state_keys=["bumper", "v"]).attach(robot):
+    with JsonlRecorder("run.jsonl").attach(robot):  # or McapRecorder("run.mcap")
         async with robot:
             ...
     recording = load("run.jsonl")
     print(format_summary(summarize(recording)))
     Path("run.html").write_text(render_timeline_html(recording))
 
-Recorders: `JsonlRecorder` (built in), `McapRecorder` (the ``mcap`` extra;
-opens in Foxglove), `MemoryRecorder` (in memory, for tests and the CLI).
+A recording holds the executive's events, every state key at each change (a
+simulated robot's sensors at its control rate) and the robot's pose in
+``map``; `load` reads JSON Lines and MCAP alike. Recorders: `JsonlRecorder`
+(built in), `McapRecorder` (the ``mcap`` extra; opens in Foxglove, on its
+well-known schemas), `MemoryRecorder` (in memory, for tests and the CLI).
 """
 
 from ._format import format_summary as format_summary
+from ._format import shown as shown
 from ._jsonl import JsonlRecorder as JsonlRecorder
 from ._mcap import McapRecorder as McapRecorder
 from ._recorder import MemoryRecorder as MemoryRecorder
 from ._recorder import Recorder as Recorder
 from ._recording import FORMAT as FORMAT
 from ._recording import VERSION as VERSION
+from ._recording import PoseTrack as PoseTrack
 from ._recording import Recording as Recording
 from ._recording import RecordingHeader as RecordingHeader
+from ._recording import Series as Series
 from ._recording import load as load
 from ._summary import ActionStats as ActionStats
 from ._summary import Cancellation as Cancellation
@@ -45,13 +51,16 @@ __all__ = [
     "McapRecorder",
     "MemoryRecorder",
     "Outcomes",
+    "PoseTrack",
     "Recorder",
     "Recording",
     "RecordingHeader",
     "ResourceStats",
+    "Series",
     "Summary",
     "format_summary",
     "load",
     "render_timeline_html",
+    "shown",
     "summarize",
 ]

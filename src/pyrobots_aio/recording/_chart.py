@@ -1,4 +1,9 @@
-"""The actions/events-per-minute chart of the timeline page (an SVG bar chart)."""
+"""The actions/events chart of the replay page: counts per bucket, on the timeline's axis.
+
+Each bar counts what happened in its bucket (no scaling: a bucket of 10 s
+shows the actions started in those 10 s), and the buckets sit on the same time
+axis as the timeline above, with the same ticks.
+"""
 
 from __future__ import annotations
 
@@ -6,17 +11,18 @@ import math
 from typing import TYPE_CHECKING
 
 from . import _svg
-from ._summary import MINUTE, per_bucket
-from ._svg import LABEL_W, PLOT_W, WIDTH
+from ._summary import per_bucket
+from ._svg import LABEL_W, WIDTH, cursor_marks, timed_attributes
 
 if TYPE_CHECKING:
     from ._analysis import Analysis
     from ._recording import Recording
+    from ._svg import Scale
 
 BUCKETS = (1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600)
 """Bucket widths in seconds; the chart takes the narrowest giving at most `MAX_BARS` buckets."""
 MAX_BARS = 60
-HEIGHT = 180
+HEIGHT = 160
 TOP = 12
 
 
@@ -28,45 +34,38 @@ def bucket_width(duration: float) -> float:
     return float(BUCKETS[-1] * math.ceil(duration / (BUCKETS[-1] * MAX_BARS)))
 
 
-def _x_labels(count: int, width: float) -> list[str]:
-    every = max(1, math.ceil(count / 12))
-    slot = PLOT_W / count
-    y = TOP + HEIGHT + 16
-    return [
-        f'<text x="{LABEL_W + i * slot:.1f}" y="{y}" text-anchor="middle">{i * width:g}</text>'
-        for i in range(0, count + 1, every)
-    ]
+def _per(width: float) -> str:
+    return "per minute" if width == 60 else f"per {width:g} s"
 
 
-def rate_chart(recording: Recording, found: Analysis) -> str:
-    """The SVG chart: actions spawned and monitor firings per minute, bucket by bucket."""
+def rate_chart(recording: Recording, found: Analysis, scale: Scale) -> str:
+    """The SVG chart: actions spawned and monitor firings per bucket, on ``scale``."""
     width = bucket_width(recording.duration)
     start, duration = recording.start, recording.duration
     actions = per_bucket((s.spawned for s in found.spans.values()), start, duration, width)
     events = per_bucket((e.time for e in found.firings), start, duration, width)
-    scale = MINUTE / width
-    peak = max(*actions, *events) * scale
-    parts, ceiling = _svg.bar_chart_axis(TOP, HEIGHT, peak)
-    slot = PLOT_W / len(actions)
-    bar = max(1.0, slot / 2 - 1)
+    parts, ceiling = _svg.bar_chart_axis(TOP, HEIGHT, max(*actions, *events))
     for i, (a, e) in enumerate(zip(actions, events, strict=True)):
-        x = LABEL_W + i * slot
+        left, right = scale.x(start + i * width), scale.x(start + min(duration, (i + 1) * width))
+        bar = max(1.0, (right - left) / 2 - 1)
         span = f"{i * width:g}-{(i + 1) * width:g} s"
         for offset, cls, count, what in (
-            (0.0, "rate-actions", a, "actions"),
+            (0.0, "rate-actions", a, "actions started"),
             (bar, "rate-events", e, "events"),
         ):
-            h = count * scale / ceiling * HEIGHT
-            title = f"{span}: {count} {what} ({count * scale:g} per minute)"
-            parts.append(_svg.rect(cls, (x + offset, TOP + HEIGHT - h, bar, h), title))
-    parts += _x_labels(len(actions), width)
-    legend_y = TOP + HEIGHT + 34
+            h = count / ceiling * HEIGHT
+            title = f"{span}: {count} {what}"
+            parts.append(_svg.rect(cls, (left + offset, TOP + HEIGHT - h, bar, h), title))
+    bottom = TOP + HEIGHT
+    parts += _svg.time_axis(scale, bottom, label_y=bottom + 16, top=TOP)
+    legend_y = bottom + 34
     parts.append(
-        f'<text x="{LABEL_W}" y="{legend_y}">per minute, in buckets of {width:g} s '
-        f"(blue: actions started; purple: events, i.e. monitor firings)</text>"
+        f'<text x="{LABEL_W}" y="{legend_y}">counts {_per(width)} (blue: actions started; '
+        "purple: events, i.e. monitor firings)</text>"
     )
+    parts.append(cursor_marks(TOP, bottom, TOP + 10))
     total = legend_y + 10
     return (
         f'<svg class="rates" xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {WIDTH} {total}" '
-        f'width="{WIDTH}" height="{total}">' + "".join(parts) + "</svg>"
+        f'width="{WIDTH}" height="{total}" {timed_attributes(scale)}>' + "".join(parts) + "</svg>"
     )

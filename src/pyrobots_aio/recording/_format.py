@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -18,9 +19,27 @@ def _seconds(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
-def _series(counts: Sequence[int]) -> str:
-    shown = ", ".join(str(c) for c in counts[:_SHOWN])
-    return shown + (f", ... ({len(counts)} minutes)" if len(counts) > _SHOWN else "")
+_CONTROLS = {c: f"\\x{c:02x}" for c in [*range(0x20), *range(0x7F, 0xA0)]}
+_CONTROLS.update({0x2028: "\\u2028", 0x2029: "\\u2029"})
+
+
+def shown(text: object) -> str:
+    r"""``text`` safe for a terminal: control characters (escape sequences, newlines) escaped.
+
+    Every string taken from a recording goes through this, so that a crafted
+    recording cannot move the cursor, recolour the terminal or forge lines.
+
+    Example:
+        >>> shown("drive\x1b[2J")
+        'drive\\x1b[2J'
+    """
+    return str(text).translate(_CONTROLS)
+
+
+def _series(counts: Sequence[int], duration: float) -> str:
+    minutes = max(1, math.ceil(duration / 60)) if math.isfinite(duration) else len(counts)
+    more = f", ... ({minutes:g} minutes)" if minutes > _SHOWN else ""
+    return ", ".join(str(c) for c in counts[:_SHOWN]) + more
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[str]], indent: str = "  ") -> list[str]:
@@ -37,19 +56,23 @@ def table(header: Sequence[str], rows: Sequence[Sequence[str]], indent: str = " 
 
 
 def _overview(summary: Summary) -> list[str]:
-    robot = summary.robot or "unknown robot"
+    robot = shown(summary.robot or "unknown robot")
     seed = f", seed {summary.seed}" if summary.seed is not None else ""
     state = "closed cleanly" if summary.complete else "NOT closed (incomplete)"
     o = summary.outcomes
     peak_at = f" at {summary.peak_time:.3f} s" if summary.peak_time is not None else ""
+    sampled = ""
+    if summary.state_samples or summary.poses:
+        sampled = f" ({summary.state_samples} state samples, {summary.poses} poses)"
     return [
-        f"{robot}{seed}: {summary.duration:.3f} s recorded, {summary.records} events, {state}",
+        f"{robot}{seed}: {summary.duration:.3f} s recorded, {summary.records} events{sampled}, "
+        f"{state}",
         f"  actions            {summary.actions}: {o.succeeded} succeeded, {o.failed} failed, "
         f"{o.cancelled} cancelled, {o.skipped} skipped, {o.not_done} not done",
         f"  actions per minute {summary.mean_actions_per_minute:.1f} mean; "
-        f"by minute: {_series(summary.actions_per_minute)}",
+        f"by minute: {_series(summary.actions_per_minute, summary.duration)}",
         f"  events per minute  {summary.mean_events_per_minute:.1f} mean (monitor firings); "
-        f"by minute: {_series(summary.events_per_minute)}",
+        f"by minute: {_series(summary.events_per_minute, summary.duration)}",
         f"  peak concurrency   {summary.peak_concurrency} actions{peak_at}",
     ]
 
@@ -70,7 +93,7 @@ def _actions(summary: Summary) -> list[str]:
     ]
     rows = [
         [
-            s.name,
+            shown(s.name),
             str(s.count),
             str(s.outcomes.succeeded),
             str(s.outcomes.failed),
@@ -91,7 +114,7 @@ def _resources(summary: Summary) -> list[str]:
     header = ["resource", "held s", "use", "acquired", "waits", "max wait s", "preempted"]
     rows = [
         [
-            r.name,
+            shown(r.name),
             f"{r.held:.3f}",
             f"{100 * r.utilisation:.1f}%",
             str(r.acquisitions),
@@ -123,9 +146,11 @@ def format_summary(summary: Summary) -> str:
           events per minute  0.0 mean (monitor firings); by minute: 0
           peak concurrency   0 actions
     """
-    cancels = [f"{c.time:9.3f} s  {c.describe()}" for c in summary.cancellations]
-    failures = [f"{f.time:9.3f} s  {f.name}#{f.action}: {f.error}" for f in summary.failures]
-    firings = [f"{name}: {count}" for name, count in summary.monitor_firings.items()]
+    cancels = [f"{c.time:9.3f} s  {shown(c.describe())}" for c in summary.cancellations]
+    failures = [
+        f"{f.time:9.3f} s  {shown(f.name)}#{f.action}: {shown(f.error)}" for f in summary.failures
+    ]
+    firings = [f"{shown(name)}: {count}" for name, count in summary.monitor_firings.items()]
     extra = []
     if summary.escalations or summary.abandoned:
         extra = [

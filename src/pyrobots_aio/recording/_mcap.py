@@ -1,23 +1,35 @@
-"""The MCAP recorder (the ``mcap`` extra): JSON messages on JSON-schema channels.
+"""The MCAP recorder (the ``mcap`` extra): a run on Foxglove's channels, in one file.
 
-Foxglove opens the file as it is: the executive events go to
-``/pyrobots/actions``, ``/pyrobots/resources`` and ``/pyrobots/monitors``, each
-sampled state key to ``/pyrobots/state/<key>`` (plot ``.value``). Message
-times are the run's wall-clock start plus the loop time elapsed since, so
-Foxglove shows the date of the run; each message also carries the loop time.
-Messages are strict JSON, which Foxglove requires: a non-finite float (NaN,
-Infinity) is written as null.
+The channels are those of the live view (``Robot(serve=PORT)``): the
+executive's events on ``/pyrobots/actions``, ``/pyrobots/resources`` and
+``/pyrobots/monitors`` (JSON schema ``pyrobots_aio.ExecEvent``), each state key
+on ``/pyrobots/state/<key>`` (plot ``.value``), the pose on ``/pyrobots/pose``
+(``foxglove.PoseInFrame``), ``map`` -> ``base_link`` on ``/tf``
+(``foxglove.FrameTransforms``), and notable events and the library's log
+records on ``/pyrobots/log`` (``foxglove.Log``). Every message is strict JSON.
+The header facts (robot, seed, floor plan ...) are the ``pyrobots_aio``
+metadata record, each value JSON-encoded; ``pyrobots_aio.end`` is written on
+close. `load` reads the file back into the same `Recording` as the JSON Lines
+recorder gives.
 """
 
 from __future__ import annotations
 
 import datetime
+import logging
 import os
 from typing import TYPE_CHECKING, Any
 
 from pyrobots_aio import RecordingError
+from pyrobots_aio.robot.channels import (
+    FIXED_CHANNELS,
+    SCHEMAS,
+    FoxgloveChannels,
+    LogForwarder,
+    Message,
+    strict_json,
+)
 
-from ._jsonl import _encode
 from ._recorder import Recorder
 
 if TYPE_CHECKING:
@@ -26,35 +38,11 @@ if TYPE_CHECKING:
 
     from mcap.writer import Writer
 
-    from pyrobots_aio import ExecEvent
+    from pyrobots_aio import ExecEvent, Robot
+    from pyrobots_aio.robot.sampling import Pose2D
 
-EVENT_SCHEMA: dict[str, Any] = {
-    "title": "pyrobots_aio.ExecEvent",
-    "type": "object",
-    "properties": {
-        "time": {"type": "number", "description": "loop time (robot.time()), seconds"},
-        "kind": {"type": "string", "description": "what happened, e.g. action.finished"},
-        "action": {"type": ["integer", "null"], "description": "the action's id"},
-        "name": {"type": ["string", "null"], "description": "the action's or monitor's name"},
-        "data": {"type": "object", "description": "kind-specific details"},
-    },
-    "required": ["time", "kind"],
-}
-"""The JSON schema of executive event messages."""
-
-STATE_SCHEMA: dict[str, Any] = {
-    "title": "pyrobots_aio.StateSample",
-    "type": "object",
-    "properties": {
-        "time": {"type": "number", "description": "loop time of the write, seconds"},
-        "key": {"type": "string"},
-        "value": {"description": "the value written"},
-    },
-    "required": ["time", "key", "value"],
-}
-"""The JSON schema of state sample messages."""
-
-_TOPICS = {"action": "/pyrobots/actions", "resource": "/pyrobots/resources"}
+LOGGER = "pyrobots_aio"
+"""The logger whose records go to ``/pyrobots/log`` with ``logs=True``."""
 
 
 def _writer_class() -> type[Writer]:
@@ -63,31 +51,45 @@ def _writer_class() -> type[Writer]:
     except ImportError as exc:
         msg = (
             "McapRecorder needs the 'mcap' package, which is optional: "
-            'install it with pip install mcap (or pip install -e ".[mcap]" in a checkout), '
+            'install it with pip install -e ".[mcap]" from a checkout (or pip install mcap), '
             "or record with JsonlRecorder"
         )
         raise RecordingError(msg) from exc
     return Writer
 
 
-class McapRecorder(Recorder):
-    """Records a robot's events to an MCAP file that Foxglove opens.
+def origin_ns(header: Mapping[str, Any]) -> int:
+    """The wall-clock start of a run in ns since 1970, from its header's ``created``."""
+    created = header.get("created")
+    if not isinstance(created, str):
+        return 0
+    try:
+        return round(datetime.datetime.fromisoformat(created).timestamp() * 1e9)
+    except ValueError:
+        return 0
 
-    Needs the ``mcap`` extra (``pip install -e ".[mcap]"`` in a checkout); without it,
-    creating one raises `RecordingError` naming the extra.
+
+class McapRecorder(Recorder):
+    """Records a robot's run to an MCAP file that Foxglove opens and `load` reads.
+
+    Needs the ``mcap`` extra; without it, creating one raises `RecordingError`
+    naming the extra.
 
     Args:
         path: The file to write (replaced if it exists).
-        state_keys: State keys to sample (see `Recorder`).
-        sample_rate: Most samples per second and numeric key (None: every change).
+        state_keys: State keys to sample (None: every key; see `Recorder`).
+        sample_rate: None (default): every change; a number downsamples numbers
+            and the pose to at most that many samples per second.
+        pose_frame: The frame whose pose in ``map`` is recorded (None: none).
         metadata: Free facts for the file's ``pyrobots_aio`` metadata record.
+        logs: Also record the records of the ``pyrobots_aio`` logger (those its
+            level lets through) on ``/pyrobots/log`` while attached.
 
     Example:
         >>> from pyrobots_aio.sim import SimRobot
         >>> from pyrobots_aio.recording import McapRecorder
         >>> robot = SimRobot()  # doctest: +SKIP
-        >>> recorder = McapRecorder("run.mcap", state_keys=["v", "bumper"])  # doctest: +SKIP
-        >>> with recorder.attach(robot):  # doctest: +SKIP
+        >>> with McapRecorder("run.mcap").attach(robot):  # doctest: +SKIP
         ...     ...  # async with robot: ...
     """
 
@@ -95,37 +97,51 @@ class McapRecorder(Recorder):
         self,
         path: str | os.PathLike[str],
         *,
-        state_keys: Iterable[str] = (),
-        sample_rate: float | None = 10.0,
+        state_keys: Iterable[str] | None = None,
+        sample_rate: float | None = None,
+        pose_frame: str | None = "base_link",
         metadata: Mapping[str, object] | None = None,
+        logs: bool = False,
     ) -> None:
         self._writer_class = _writer_class()
-        super().__init__(state_keys=state_keys, sample_rate=sample_rate, metadata=metadata)
+        super().__init__(
+            state_keys=state_keys, sample_rate=sample_rate, pose_frame=pose_frame, metadata=metadata
+        )
         self.path = os.fspath(path)
+        self.logs = logs
         self._file: BinaryIO | None = None
         self._writer: Writer | None = None
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
-        self._origin_ns = 0
-        self._t0 = 0.0
+        self._foxglove = FoxgloveChannels(0, 0.0)
+        self._forwarder: LogForwarder | None = None
+
+    def attach(self, robot: Robot) -> McapRecorder:
+        """Record ``robot`` (see `Recorder.attach`); with ``logs``, its log records too."""
+        super().attach(robot)
+        if self.logs and self._forwarder is None:
+            self._forwarder = LogForwarder(self._foxglove, self._write)
+            logging.getLogger(LOGGER).addHandler(self._forwarder)
+        return self
 
     def _open(self, header: Mapping[str, Any]) -> None:
         self._file = open(self.path, "wb")  # noqa: SIM115 (closed in _finish)
         writer = self._writer = self._writer_class(self._file)
         writer.start(profile="", library="pyrobots_aio")
-        writer.add_metadata("pyrobots_aio", {k: _encode(v) for k, v in header.items()})
-        created = datetime.datetime.fromisoformat(str(header["created"]))
-        self._origin_ns = round(created.timestamp() * 1e9)
+        writer.add_metadata("pyrobots_aio", {k: strict_json(v).decode() for k, v in header.items()})
         t0 = header.get("t0")
-        self._t0 = float(t0) if isinstance(t0, int | float) else float("nan")
+        frame = header.get("pose_frame")
+        self._foxglove = FoxgloveChannels(
+            origin_ns(header),
+            float(t0) if isinstance(t0, int | float) else float("nan"),
+            frame if isinstance(frame, str) else "base_link",
+        )
         self._schemas = {
-            "event": writer.register_schema(
-                "pyrobots_aio.ExecEvent", "jsonschema", _encode(EVENT_SCHEMA).encode()
-            ),
-            "state": writer.register_schema(
-                "pyrobots_aio.StateSample", "jsonschema", _encode(STATE_SCHEMA).encode()
-            ),
+            name: writer.register_schema(name, "jsonschema", strict_json(schema))
+            for name, schema in SCHEMAS.items()
         }
+        for topic, schema in FIXED_CHANNELS.items():
+            self._channel(topic, schema)
 
     def _channel(self, topic: str, schema: str) -> int:
         channel = self._channels.get(topic)
@@ -134,30 +150,38 @@ class McapRecorder(Recorder):
             self._channels[topic] = channel
         return channel if channel is not None else 0
 
-    def _record(self, event: ExecEvent) -> None:
-        if self._writer is None:
+    def _write(self, message: Message) -> None:
+        writer = self._writer
+        if writer is None:
             return
-        if self._t0 != self._t0:  # NaN: no loop at open; the first event is the origin
-            self._t0 = event.time
-        kind = event.kind.value
-        if kind == "state.sample":
-            topic, schema = f"/pyrobots/state/{event.name}", "state"
-            message: dict[str, Any] = {"time": event.time, "key": event.name}
-            message["value"] = event.data.get("value")
-        else:
-            group = kind.partition(".")[0]
-            topic, schema = _TOPICS.get(group, "/pyrobots/monitors"), "event"
-            message = {"time": event.time, "kind": kind, "action": event.action}
-            message.update(name=event.name, data=dict(event.data))
-        stamp = self._origin_ns + max(0, round((event.time - self._t0) * 1e9))
-        channel = self._channel(topic, schema)
-        self._writer.add_message(channel, stamp, _encode(message).encode(), stamp, self._count)
+        channel = self._channel(message.topic, message.schema)
+        stamp = message.log_time
+        writer.add_message(channel, stamp, message.data, stamp)
+
+    def _record(self, event: ExecEvent) -> None:
+        foxglove = self._foxglove
+        if foxglove.t0 != foxglove.t0:  # NaN: no loop at open; the first event is the origin
+            foxglove.t0 = event.time
+        for message in foxglove.event(event):
+            self._write(message)
+
+    def _record_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+        foxglove = self._foxglove
+        if foxglove.t0 != foxglove.t0:
+            foxglove.t0 = time
+        for message in foxglove.samples(time, values, pose):
+            self._write(message)
 
     def _finish(self, end: float | None, count: int) -> None:
+        if self._forwarder is not None:
+            logging.getLogger(LOGGER).removeHandler(self._forwarder)
+            self._forwarder = None
         writer, file = self._writer, self._file
         self._writer = self._file = None
         if writer is not None:
-            writer.add_metadata("pyrobots_aio.end", {"end": _encode(end), "events": str(count)})
+            writer.add_metadata(
+                "pyrobots_aio.end", {"end": strict_json(end).decode(), "events": str(count)}
+            )
             writer.finish()  # type: ignore[no-untyped-call]
         if file is not None:
             file.close()

@@ -1,10 +1,11 @@
-"""What every recorder shares: attaching to a robot, sampling its state, closing.
+"""What every recorder shares: attaching to a robot, sampling its state and pose, closing.
 
 A recorder is an `Instrument`: the executive calls its ``on_event`` inline, so
 subclasses keep that path short (append to a buffer) and write in bulk. The
 base class adds what the instrumentation hook alone does not give: the header
-facts (robot class, seed), rate-limited samples of chosen state keys, and a
-lifecycle (``attach`` ... ``close``, or a ``with`` block).
+facts (robot class, seed, the arena's floor plan), the robot's state and pose
+sampled at each write of the state (each control tick of a simulated robot),
+and a lifecycle (``attach`` ... ``close``, or a ``with`` block).
 """
 
 from __future__ import annotations
@@ -15,15 +16,15 @@ import logging
 import math
 from typing import TYPE_CHECKING, Any, Self
 
-from pyrobots_aio import EventKind, ExecEvent, RecordingError
+from pyrobots_aio import ExecEvent, RecordingError
+from pyrobots_aio.robot.sampling import Pose2D, StateSampler
 
-from ._recording import FORMAT, VERSION, Recording, RecordingHeader
+from ._recording import FORMAT, VERSION, Recording, RecordingHeader, SeriesBuilder
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
 
     from pyrobots_aio import Robot
-    from pyrobots_aio.state import Subscription
 
 _log = logging.getLogger("pyrobots_aio.recording")
 
@@ -39,44 +40,57 @@ def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
-def _same(old: object, new: object) -> bool:
-    """Whether a sample would repeat the last one (only plain scalars are compared)."""
-    if type(old) is not type(new) or not isinstance(new, bool | int | float | str | None):
-        return False
-    return old == new
+def floor_plan(robot: Robot) -> list[dict[str, Any]]:
+    """The static shapes of ``robot``'s world, if it has one (``SimRobot.world.floor_plan()``)."""
+    world = getattr(robot, "world", None)
+    plan = getattr(world, "floor_plan", None)
+    return list(plan()) if callable(plan) else []
 
 
 class Recorder:
-    """The base of the recorders: attach to a robot, sample its state, close.
+    """The base of the recorders: attach to a robot, sample its state and pose, close.
 
-    Subclasses implement ``_record(event)``, ``_open(header)`` and
-    ``_finish(end, count)``; users call `attach`, `close` or use ``with``.
+    Subclasses implement ``_record(event)``, ``_record_samples(time, values, pose)``,
+    ``_open(header)`` and ``_finish(end, count)``; users call `attach`, `close`
+    or use ``with``.
 
     Args:
-        state_keys: State keys to sample into the recording (``state.sample``
-            events): the value after each write, rate-limited per key.
-        sample_rate: Most samples per second and key for numbers; booleans,
-            strings and other discrete values are recorded on every change, so a
-            one-tick bumper press is never lost. None records every change.
+        state_keys: State keys to sample: the value after each write that
+            changes it. None (default): every key.
+        sample_rate: None (default): every change is recorded, so a simulated
+            robot's sensors and pose are recorded at its control rate. A number
+            downsamples numbers and the pose to at most that many samples per
+            second and key; booleans, strings and other discrete values are
+            always recorded on every change, so a one-tick bumper press is never lost.
+        pose_frame: The frame whose pose in ``map`` is recorded with each state
+            write, if the robot knows it (None: no pose).
         metadata: Free JSON-friendly facts to store in the header.
     """
 
     def __init__(
         self,
         *,
-        state_keys: Iterable[str] = (),
-        sample_rate: float | None = 10.0,
+        state_keys: Iterable[str] | None = None,
+        sample_rate: float | None = None,
+        pose_frame: str | None = "base_link",
         metadata: Mapping[str, object] | None = None,
     ) -> None:
-        if sample_rate is not None and not (math.isfinite(sample_rate) and sample_rate > 0):
+        if sample_rate is not None and not (
+            _is_number(sample_rate) and math.isfinite(sample_rate) and sample_rate > 0
+        ):
             msg = (
                 "sample_rate must be a positive number of samples per second or None, "
                 f"got {sample_rate!r}"
             )
             raise ValueError(msg)
-        keys = (state_keys,) if isinstance(state_keys, str) else tuple(state_keys)
-        self.state_keys: tuple[str, ...] = keys
+        keys: tuple[str, ...] | None
+        if state_keys is None:
+            keys = None
+        else:
+            keys = (state_keys,) if isinstance(state_keys, str) else tuple(state_keys)
+        self.state_keys = keys
         self.sample_rate = sample_rate
+        self.pose_frame = pose_frame
         # A hair under the period, so that a write due exactly on time is not lost to rounding.
         self._period = 0.0 if sample_rate is None else (1.0 - 1e-6) / sample_rate
         self._header: dict[str, Any] = {
@@ -86,13 +100,19 @@ class Recorder:
             "robot": None,
             "seed": None,
             "t0": None,
-            "state_keys": list(keys),
+            "state_keys": None if keys is None else list(keys),
             "sample_rate": sample_rate,
+            "pose_frame": None,
+            "floor_plan": [],
             "metadata": dict(metadata or {}),
         }
         self._robot: Robot | None = None
-        self._subscription: Subscription | None = None
-        self._sampled: dict[str, tuple[float, object]] = {}
+        self._sampler = StateSampler(
+            self._take_samples,
+            keys=None if keys is None else frozenset(keys),
+            period=self._period,
+            pose_frame=pose_frame,
+        )
         self._opened = False
         self._closed = False
         self._late = False
@@ -122,15 +142,14 @@ class Recorder:
         seed = getattr(robot, "seed", None)
         known = isinstance(seed, int) and not isinstance(seed, bool)
         self._header.update(robot=type(robot).__name__, seed=seed if known else None)
+        self._header.update(floor_plan=floor_plan(robot))
         if not any(instrument is self for instrument in robot.instruments):
             robot.instruments.add(self)
+        frame = self.pose_frame
+        known = frame is not None and frame in robot.poses.frames()
+        self._header["pose_frame"] = self._sampler.pose_frame = frame if known else None
         self._ensure_open()
-        if self.state_keys:
-            store = robot.state
-            self._subscription = store.subscribe(self._sample, keys=self.state_keys)
-            present = {key: store[key] for key in self.state_keys if key in store}
-            if present:
-                self._sample(present)
+        self._sampler.start(robot)
         return self
 
     def close(self) -> None:
@@ -145,9 +164,7 @@ class Recorder:
         self._ensure_open()
         self.flush()
         self._closed = True
-        if self._subscription is not None:
-            self._subscription.close()
-            self._subscription = None
+        self._sampler.stop()
         if self._robot is not None:
             self._robot.instruments.remove(self)
         now = _loop_time()
@@ -186,20 +203,12 @@ class Recorder:
             self._late = True
             _log.warning("%r is closed; events are no longer recorded", self)
 
-    def _sample(self, changes: Mapping[str, object]) -> None:
-        store = self._robot.state if self._robot is not None else None
-        if store is None or self._closed:
-            return
-        for key, value in changes.items():
-            stamp = store.timestamp(key)
-            last = self._sampled.get(key)
-            if last is not None:
-                if _same(last[1], value):
-                    continue
-                if _is_number(value) and stamp - last[0] < self._period:
-                    continue
-            self._sampled[key] = (stamp, value)
-            self.on_event(ExecEvent(EventKind.STATE_SAMPLE, stamp, None, key, {"value": value}))
+    def _take_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+        if not self._opened:
+            self._ensure_open(time)
+        self._count += 1
+        self._last_time = time
+        self._record_samples(time, values, pose)
 
     def _ensure_open(self, first_time: float | None = None) -> None:
         if self._opened:
@@ -220,6 +229,10 @@ class Recorder:
         """Start the output, with the header facts."""
 
     def _record(self, event: ExecEvent) -> None:
+        raise NotImplementedError
+
+    def _record_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+        """Record the state ``values`` written at ``time`` (changed or due) and the pose."""
         raise NotImplementedError
 
     def _finish(self, end: float | None, count: int) -> None:
@@ -253,16 +266,27 @@ class MemoryRecorder(Recorder):
     def __init__(
         self,
         *,
-        state_keys: Iterable[str] = (),
-        sample_rate: float | None = 10.0,
+        state_keys: Iterable[str] | None = None,
+        sample_rate: float | None = None,
+        pose_frame: str | None = "base_link",
         metadata: Mapping[str, object] | None = None,
     ) -> None:
-        super().__init__(state_keys=state_keys, sample_rate=sample_rate, metadata=metadata)
+        super().__init__(
+            state_keys=state_keys, sample_rate=sample_rate, pose_frame=pose_frame, metadata=metadata
+        )
         self.events: list[ExecEvent] = []
+        self._series = SeriesBuilder()
         self._end: float | None = None
 
     def _record(self, event: ExecEvent) -> None:
         self.events.append(event)
+
+    def _record_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+        add = self._series.add
+        for key, value in values.items():
+            add(time, key, value)
+        if pose is not None:
+            self._series.add_pose(time, *pose)
 
     def _finish(self, end: float | None, count: int) -> None:
         self._end = end
@@ -270,4 +294,11 @@ class MemoryRecorder(Recorder):
     def recording(self) -> Recording:
         """The events so far as a `Recording` (complete once the recorder is closed)."""
         header = RecordingHeader.from_json(self._header)
-        return Recording(header, tuple(self.events), end=self._end if self._closed else None)
+        samples, poses = self._series.build(header.pose_frame)
+        return Recording(
+            header,
+            tuple(self.events),
+            end=self._end if self._closed else None,
+            samples=samples,
+            poses=poses,
+        )

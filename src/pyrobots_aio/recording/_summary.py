@@ -138,10 +138,11 @@ class Summary:
         seed: Its seed, if known.
         duration: Seconds recorded.
         complete: Whether the recording was closed properly and read without error.
-        records: Events in the recording (state samples included).
+        records: Executive events in the recording (state samples and poses not included).
         actions: Actions spawned.
         outcomes: How they ended.
-        actions_per_minute: Actions spawned in each minute of the run.
+        actions_per_minute: Actions spawned in each minute of the run (at most
+            `MAX_BUCKETS` minutes: the last one counts the rest).
         mean_actions_per_minute: ``actions`` over the duration in minutes.
         events_per_minute: Monitor firings in each minute of the run.
         mean_events_per_minute: Firings over the duration in minutes.
@@ -152,7 +153,8 @@ class Summary:
         cancellations: Every cancellation request, in order.
         failures: Every failed action, in order.
         monitor_firings: Firings per monitor name.
-        state_samples: State samples recorded.
+        state_samples: State values recorded (every key).
+        poses: Poses recorded.
         escalations: Cancellations repeated after an action overran its grace.
         abandoned: Actions abandoned after ignoring cancellation.
     """
@@ -176,16 +178,26 @@ class Summary:
     failures: tuple[Failure, ...]
     monitor_firings: Mapping[str, int] = field(default_factory=dict)
     state_samples: int = 0
+    poses: int = 0
     escalations: int = 0
     abandoned: int = 0
 
 
+MAX_BUCKETS = 10_000
+"""Most buckets a series holds (a week of minutes): memory follows the events, not the span."""
+
+
 def per_bucket(times: Iterable[float], start: float, duration: float, width: float) -> list[int]:
-    """Count ``times`` in consecutive buckets of ``width`` seconds from ``start``."""
-    counts = [0] * max(1, math.ceil(duration / width))
+    """Count ``times`` in consecutive buckets of ``width`` seconds from ``start``.
+
+    At most `MAX_BUCKETS` buckets: times past the last one are counted in it.
+    """
+    buckets = duration / width if width > 0 else 0.0
+    counts = [0] * (min(MAX_BUCKETS, max(1, math.ceil(buckets))) if math.isfinite(buckets) else 1)
     last = len(counts) - 1
     for time in times:
-        counts[min(last, max(0, int((time - start) // width)))] += 1
+        index = (time - start) // width if width > 0 else 0.0
+        counts[int(min(last, max(0.0, index))) if math.isfinite(index) else last] += 1
     return counts
 
 
@@ -272,7 +284,8 @@ def summarize(recording: Recording) -> Summary:
         cancellations=tuple(_cancellations(found, start)),
         failures=tuple(failures),
         monitor_firings=dict(sorted(firings.items())),
-        state_samples=found.samples,
+        state_samples=recording.state_samples,
+        poses=len(recording.poses),
         escalations=found.escalations,
         abandoned=found.abandoned,
     )

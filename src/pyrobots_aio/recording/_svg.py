@@ -30,12 +30,40 @@ def esc(text: object) -> str:
     return html.escape(str(text), quote=True)
 
 
-def hue(index: int) -> str:
-    """The ``index``-th of a sequence of well-separated muted colours (golden-angle hues).
+def css_class(text: object, default: str = "other") -> str:
+    """``text`` as a CSS class name if it is a plain word (letters, digits, ``_``, ``-``)."""
+    word = str(text)
+    return word if word and word.replace("_", "").replace("-", "").isalnum() else default
 
-    Muted, so that resource holds are not mistaken for the outcome colours of actions.
-    """
-    return f"hsl({(210 + index * 137.508) % 360:.0f},28%,52%)"
+
+_RAMP = ((68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37))
+"""Viridis at 0, 1/4, 1/2, 3/4 and 1: dark purple (start) to yellow (end), for the path."""
+
+
+def ramp(fraction: float) -> str:
+    """The colour of ``fraction`` (0 to 1) of the way along the run."""
+    f = min(1.0, max(0.0, fraction if math.isfinite(fraction) else 0.0)) * (len(_RAMP) - 1)
+    i = min(int(f), len(_RAMP) - 2)
+    a, b, w = _RAMP[i], _RAMP[i + 1], f - i
+    r, g, bl = (round(x + (y - x) * w) for x, y in zip(a, b, strict=True))
+    return f"#{r:02x}{g:02x}{bl:02x}"
+
+
+HOLD_COLOURS = (
+    "#3949ab",  # indigo
+    "#00838f",  # dark cyan
+    "#6d4c41",  # brown
+    "#8e24aa",  # purple
+    "#546e7a",  # blue grey
+    "#827717",  # olive
+    "#283593",  # navy
+)
+"""Colours of resource holds by holder: none near the outcome colours (green, red, orange)."""
+
+
+def hue(index: int) -> str:
+    """The colour of the ``index``-th holder of resources (see `HOLD_COLOURS`; then repeats)."""
+    return HOLD_COLOURS[index % len(HOLD_COLOURS)]
 
 
 def nice_step(span: float, most: int) -> float:
@@ -68,17 +96,25 @@ class Scale:
         return max(1.0, self.x(end) - self.x(begin))
 
 
-def time_axis(scale: Scale, height: float) -> list[str]:
-    """Tick labels (seconds since the start) on top and grid lines down ``height`` pixels."""
+def ticks(scale: Scale) -> list[tuple[float, str]]:
+    """The x of each time tick and its label (seconds since the start), at most 13."""
     step = nice_step(scale.duration, 12)
-    parts = [f'<g class="axis"><text x="{LABEL_W - 8}" y="16" text-anchor="end">seconds</text>']
-    ticks = int(scale.duration // step) + 1 if scale.duration > 0 else 1
-    for i in range(ticks):
-        x = scale.x(scale.start + i * step)
-        label = f"{i * step:g}"
-        parts.append(f'<text x="{x:.1f}" y="16" text-anchor="middle">{label}</text>')
+    count = int(scale.duration // step) + 1 if 0 < scale.duration < math.inf else 1
+    return [(scale.x(scale.start + i * step), f"{i * step:g}") for i in range(count)]
+
+
+def time_axis(
+    scale: Scale, height: float, label_y: float = 16, top: float = AXIS_H - 6
+) -> list[str]:
+    """Tick labels (seconds since the start) at ``label_y`` and grid lines down to ``height``."""
+    parts = [
+        f'<g class="axis"><text x="{LABEL_W - 8}" y="{label_y:.0f}" text-anchor="end">'
+        "seconds since start</text>"
+    ]
+    for x, label in ticks(scale):
+        parts.append(f'<text x="{x:.1f}" y="{label_y:.0f}" text-anchor="middle">{label}</text>')
         parts.append(
-            f'<line class="grid" x1="{x:.1f}" y1="{AXIS_H - 6}" x2="{x:.1f}" y2="{height:.1f}"/>'
+            f'<line class="grid" x1="{x:.1f}" y1="{top:.1f}" x2="{x:.1f}" y2="{height:.1f}"/>'
         )
     parts.append("</g>")
     return parts
@@ -87,10 +123,10 @@ def time_axis(scale: Scale, height: float) -> list[str]:
 def rect(cls: str, box: tuple[float, float, float, float], title: str, fill: str = "") -> str:
     """A bar (``box``: x, y, width, height) with a tooltip, filled by its class or ``fill``."""
     x, y, w, h = box
-    style = f' style="fill:{fill}"' if fill else ""
+    style = f' style="fill:{esc(fill)}"' if fill else ""
     return (
-        f'<rect class="{cls}" x="{x:.1f}" y="{y:.1f}" width="{w:.1f}" height="{h:.1f}"{style}>'
-        f"<title>{esc(title)}</title></rect>"
+        f'<rect class="{esc(cls)}" x="{x:.1f}" y="{y:.1f}" width="{w:.1f}" height="{h:.1f}"'
+        f"{style}><title>{esc(title)}</title></rect>"
     )
 
 
@@ -115,3 +151,16 @@ def bar_chart_axis(top: float, height: float, peak: float) -> tuple[list[str], f
         )
     parts.append("</g>")
     return parts, ceiling
+
+
+def cursor_marks(top: float, bottom: float, label_y: float) -> str:
+    """The hover cursor of a figure on the time axis (hidden until the script moves it)."""
+    return (
+        f'<line class="cursor" x1="0" y1="{top:.1f}" x2="0" y2="{bottom:.1f}" '
+        f'style="display:none"/><text class="cursor-time" x="-99" y="{label_y:.1f}"></text>'
+    )
+
+
+def timed_attributes(scale: Scale) -> str:
+    """What the page's script needs to turn an x of this figure into a time, and back."""
+    return f'data-x0="{LABEL_W}" data-w="{PLOT_W}" data-duration="{scale.duration:.6f}"'

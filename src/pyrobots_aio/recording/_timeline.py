@@ -1,30 +1,41 @@
-"""`render_timeline_html`: the two figures of the pyRobots paper, as one self-contained page.
+"""`render_timeline_html`: the replay page, one self-contained HTML file.
 
-Figure 1, the timeline: one row per action *path* (an action name under its
-parent's row, so children sit indented under their parents), each instance a
-bar from its start to its end coloured by outcome, with a tooltip giving the
-parent, the outcome and, for a cancelled action, who cancelled it and why.
-Instances of one path that overlap take extra lanes. Below: each resource's
-holds (coloured by holder), waits, preemptions; monitor firings; boolean state.
+Top to bottom:
 
-Figure 2: actions started and events (monitor firings) per minute, in buckets
-of a width chosen for the run's length.
+- the **map** (`_map`): the arena from the recorded floor plan, the path
+  coloured by time, bumps, cliffs, preemptions and (un)docking where they
+  happened;
+- the **timeline** (figure 1 of the pyRobots paper): one row per action
+  *path* (an action name under its parent's row, so children sit indented
+  under their parents), each instance a bar from its start to its end
+  coloured by outcome, with a tooltip giving the parent, the outcome and, for
+  a cancelled action, who cancelled it and why; instances of one path that
+  overlap take extra lanes. Below: each resource's holds (coloured by holder,
+  named in the legend), waits and preemptions; monitor firings; boolean
+  state; then **plots** of ``v``, ``w``, each IR range and the bumper (`_plots`);
+- actions started and events (monitor firings) per bucket of time (figure 2),
+  on the same time axis.
 
-Plain HTML, inline CSS and SVG; no script, no external asset.
+Hovering the path shows the moment on the timeline and plots (a cursor), and
+hovering the timeline shows where the robot was on the map: a small static
+script does it, reading only ``data-`` attributes. Inline CSS, SVG and that
+script; no external asset. Every value taken from the recording is escaped,
+attributes included, and only plain words become class names.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
-from pyrobots_aio import EventKind
-
 from . import _svg
-from ._analysis import Analysis, Interval, Span, analyse
+from ._analysis import NOT_DONE, Analysis, Interval, Span, analyse
 from ._chart import rate_chart
+from ._map import colour_bar, render_map
+from ._plots import ROW, draw_plot, plotted
 from ._summary import summarize
-from ._svg import AXIS_H, BAR_H, ROW_H, WIDTH, Scale, esc
+from ._svg import AXIS_H, BAR_H, ROW_H, WIDTH, Scale, cursor_marks, esc, timed_attributes
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
@@ -37,20 +48,95 @@ _CSS = """
 body { font: 14px/1.4 system-ui, sans-serif; margin: 24px; color: #212121; }
 h1 { font-size: 20px; margin: 0 0 4px; } h2 { font-size: 16px; margin: 24px 0 6px; }
 .facts { color: #555; margin: 0 0 8px; } .error { color: #b71c1c; font-weight: 600; }
-svg { width: 100%; max-width: 1200px; height: auto; display: block; }
+svg { max-width: 100%; height: auto; display: block; }
+svg.timeline, svg.rates { width: 100%; max-width: 1200px; }
 svg text { font: 11px sans-serif; fill: #333; } .section { font-weight: 700; }
 .grid { stroke: #e0e0e0; stroke-width: 1; } rect { stroke: #fff; stroke-width: 0.5; }
 rect:hover { stroke: #000; stroke-width: 1; } text.in { fill: #fff; pointer-events: none; }
-text.in.dark { fill: #37474f; }
+text.in.dark { fill: #37474f; } text.out { fill: #455a64; pointer-events: none; }
 .succeeded { fill: #43a047; } .failed { fill: #e53935; } .cancelled { fill: #fb8c00; }
 .skipped { fill: #9e9e9e; } .not_done { fill: #1e88e5; }
-.wait { fill: #cfd8dc; } .state-on { fill: #7e57c2; } .cancel-mark { stroke: #000; }
-.preempt { fill: #b71c1c; } .firing { stroke: #6a1b9a; stroke-width: 2; }
+.wait { fill: #cfd8dc; } .state-on { fill: #5e35b1; } .cancel-mark { stroke: #000; }
+.preempt { fill: #000; } .firing { stroke: #6a1b9a; stroke-width: 2; }
 .rate-actions { fill: #1e88e5; } .rate-events { fill: #8e24aa; }
+.plot { fill: none; stroke: #1565c0; stroke-width: 1; }
+rect.plot.bool { fill: #d50000; stroke: none; }
+.baseline { stroke: #bdbdbd; } text.tick { fill: #757575; font-size: 10px; }
+.cursor { stroke: #d50000; stroke-width: 1; pointer-events: none; }
+svg.map { background: #f5f3ee; border: 1px solid #ddd; }
+.shape { stroke: #424242; stroke-width: 1; fill: #90a4ae; }
+.trail { fill: none; stroke-width: 2.5; stroke-linejoin: round; stroke-linecap: round; }
+.mark { stroke-width: 2; fill: none; } .mark.bump { stroke: #d50000; stroke-width: 3; }
+.mark.cliff { fill: #ff6f00; stroke: #000; stroke-width: 1; }
+.mark.preempt { fill: #000; stroke: #fff; stroke-width: 1; }
+.mark.dock { fill: #2e7d32; stroke: #fff; stroke-width: 1; }
+.mark.undock { fill: #fff; stroke: #2e7d32; }
+.start { fill: #fff; stroke: #000; } .here { fill: none; stroke: #d50000; stroke-width: 3; }
+.scalebar line { stroke: #000; stroke-width: 2; }
 .legend span { display: inline-block; margin-right: 14px; }
 .legend i { display: inline-block; width: 12px; height: 12px; margin-right: 4px;
-  vertical-align: -1px; }
+  vertical-align: -1px; box-shadow: inset 0 0 0 1px rgba(0, 0, 0, 0.3); }
+.ramp i { width: 8px; margin: 0; box-shadow: none; }
 """
+
+_SCRIPT = """
+(function () {
+  var timed = Array.prototype.slice.call(document.querySelectorAll("svg[data-x0]"));
+  var map = document.querySelector("svg.map");
+  if (!timed.length) { return; }
+  var x0 = +timed[0].dataset.x0, w = +timed[0].dataset.w, span = +timed[0].dataset.duration;
+  var track = [], here = null, ox = 0, oy = 0, k = 1;
+  if (map) {
+    here = map.querySelector(".here");
+    ox = +map.dataset.ox; oy = +map.dataset.oy; k = +map.dataset.scale;
+    track = (map.dataset.track || "").split(";").filter(Boolean).map(function (s) {
+      return s.split(",").map(Number);
+    });
+  }
+  function local(svg, ev) {
+    var p = svg.createSVGPoint(); p.x = ev.clientX; p.y = ev.clientY;
+    return p.matrixTransform(svg.getScreenCTM().inverse());
+  }
+  function poseAt(t) {
+    var lo = 0, hi = track.length - 1;
+    while (lo < hi) {
+      var mid = (lo + hi + 1) >> 1;
+      if (track[mid][0] <= t) { lo = mid; } else { hi = mid - 1; }
+    }
+    return track[lo];
+  }
+  function show(t) {
+    var x = x0 + (span > 0 ? t / span * w : 0);
+    timed.forEach(function (svg) {
+      var line = svg.querySelector(".cursor"), label = svg.querySelector(".cursor-time");
+      if (line) { line.setAttribute("x1", x); line.setAttribute("x2", x); line.style.display = ""; }
+      if (label) { label.setAttribute("x", x + 4); label.textContent = t.toFixed(2) + " s"; }
+    });
+    if (here && track.length) {
+      var p = poseAt(t);
+      here.setAttribute("cx", ox + p[1] * k); here.setAttribute("cy", oy - p[2] * k);
+    }
+  }
+  timed.forEach(function (svg) {
+    svg.addEventListener("mousemove", function (ev) {
+      var p = local(svg, ev);
+      if (p.x >= x0 && p.x <= x0 + w) { show((p.x - x0) / w * span); }
+    });
+  });
+  if (map && track.length) {
+    map.addEventListener("mousemove", function (ev) {
+      var p = local(map, ev), x = (p.x - ox) / k, y = (oy - p.y) / k, best = -1, least = 0.09;
+      track.forEach(function (q, i) {
+        var d = (q[1] - x) * (q[1] - x) + (q[2] - y) * (q[2] - y);
+        if (d < least) { least = d; best = i; }
+      });
+      if (best >= 0) { show(track[best][0]); }
+    });
+  }
+})();
+"""
+"""The page's only script: static text, it reads the ``data-`` attributes the page sets."""
+_OUTCOMES = frozenset(_svg.OUTCOME_COLOURS)
 
 
 @dataclass(slots=True)
@@ -112,6 +198,11 @@ class _Canvas:
         self.y = float(AXIS_H)
         self._hues: dict[str, str] = {}
 
+    @property
+    def holders(self) -> list[str]:
+        """The names of the actions that held resources, in order of first hold."""
+        return list(self._hues)
+
     def hue(self, name: str) -> str:
         """The colour of resource holds by actions called ``name`` (one per name)."""
         colour = self._hues.get(name)
@@ -132,19 +223,46 @@ class _Canvas:
         self.y += ROW_H
 
     def bar(
-        self, cls: str, begin: float, end: float, title: str, *, text: str = "", fill: str = ""
+        self,
+        cls: str,
+        begin: float,
+        end: float,
+        title: str,
+        *,
+        text: str = "",
+        fill: str = "",
+        room: float = 0.0,
+        least: float = 1.0,
     ) -> None:
-        """A bar on the current row, with a tooltip and, if it fits, ``text`` inside."""
-        x, w = self.scale.x(begin), self.scale.width(begin, end)
+        """A bar on the current row, with a tooltip and ``text`` inside if it fits.
+
+        Otherwise ``text`` goes right of the bar when the next ``room`` pixels
+        are free (and is left to the tooltip when they are not). ``least`` is
+        the narrowest bar drawn, in pixels, so that short pulses show.
+        """
+        x, w = self.scale.x(begin), max(least, self.scale.width(begin, end))
         self.parts.append(_svg.rect(cls, (x, self.y, w, BAR_H), title, fill))
-        fits = int((w - 4) // _svg.CHAR_W)
-        if text and fits >= 3:
-            shown = text if len(text) <= fits else text[: fits - 1] + "\u2026"
+        if not text:
+            return
+        y = self.y + BAR_H - 3
+        needed = len(text) * _svg.CHAR_W + 4
+        if w >= needed:
             ink = "in dark" if cls == "wait" else "in"
-            y = self.y + BAR_H - 3
+            self.parts.append(f'<text class="{ink}" x="{x + 2:.1f}" y="{y:.1f}">{esc(text)}</text>')
+        elif room - w >= needed + 2 and x + w + needed < WIDTH:
             self.parts.append(
-                f'<text class="{ink}" x="{x + 2:.1f}" y="{y:.1f}">{esc(shown)}</text>'
+                f'<text class="out" x="{x + w + 3:.1f}" y="{y:.1f}">{esc(text)}</text>'
             )
+
+    def lanes(
+        self, items: Sequence[T], begin: Callable[[T], float], end: Callable[[T], float]
+    ) -> Iterable[tuple[int, T, float]]:
+        """Each item's lane, the item, and the pixels free from its start to the next one."""
+        for number, lane in enumerate(_lanes(items, begin, end)):
+            for i, item in enumerate(lane):
+                after = begin(lane[i + 1]) if i + 1 < len(lane) else None
+                limit = self.scale.x(after) if after is not None else WIDTH
+                yield number, item, limit - self.scale.x(begin(item))
 
     def tick(self, cls: str, time: float, title: str) -> None:
         x = self.scale.x(time)
@@ -156,11 +274,11 @@ class _Canvas:
     def svg(self) -> str:
         height = self.y + 8
         axis = _svg.time_axis(self.scale, height)
+        cursor = cursor_marks(AXIS_H - 6, height, AXIS_H + 6)
         return (
             f'<svg class="timeline" xmlns="http://www.w3.org/2000/svg" '
-            f'viewBox="0 0 {WIDTH} {height:.0f}" width="{WIDTH}" height="{height:.0f}">'
-            + "".join(axis + self.parts)
-            + "</svg>"
+            f'viewBox="0 0 {WIDTH} {height:.0f}" width="{WIDTH}" height="{height:.0f}" '
+            f"{timed_attributes(self.scale)}>" + "".join([*axis, *self.parts, cursor]) + "</svg>"
         )
 
 
@@ -185,36 +303,56 @@ def _begin(span: Span) -> float:
     return span.begin
 
 
+def _lane_label(canvas: _Canvas, text: str, lane: int, depth: int) -> None:
+    """The label of a row: ``text`` on its first lane, "(lane N)" under it on the others."""
+    shown = text if lane == 0 else f"{text} (lane {lane + 1})"
+    canvas.parts.append(_svg.label(shown, canvas.y, depth if lane == 0 else depth + 1))
+
+
 def _draw_actions(canvas: _Canvas) -> None:
     canvas.section("actions")
     for node in _walk(_tree(canvas.found)):
-        canvas.parts.append(_svg.label(f"{node.name} x{len(node.spans)}", canvas.y, node.depth))
-        for lane in _lanes(node.spans, _begin, canvas.end_of):
-            for span in lane:
-                title = _action_title(canvas, span)
-                end = canvas.end_of(span)
-                label = f"{span.name}#{span.id}"
-                canvas.bar(f"action {span.outcome}", span.begin, end, title, text=label)
-                if span.cancelled_at is not None:
-                    canvas.tick(
-                        "cancel-mark", span.cancelled_at, f"cancel requested: {span.reason}"
-                    )
-            canvas.y += ROW_H
+        title = f"{node.name} x{len(node.spans)}"
+        current = -1
+        for lane, span, room in canvas.lanes(node.spans, _begin, canvas.end_of):
+            if lane != current:
+                canvas.y += ROW_H if current >= 0 else 0
+                current = lane
+                _lane_label(canvas, title if lane == 0 else node.name, lane, node.depth)
+            outcome = span.outcome if span.outcome in _OUTCOMES else NOT_DONE
+            canvas.bar(
+                f"action {outcome}",
+                span.begin,
+                canvas.end_of(span),
+                _action_title(canvas, span),
+                text=f"{span.name}#{span.id}",
+                room=room,
+            )
+            if span.cancelled_at is not None:
+                canvas.tick("cancel-mark", span.cancelled_at, f"cancel requested: {span.reason}")
+        canvas.y += ROW_H
 
 
-def _interval_rows(canvas: _Canvas, intervals: list[Interval], cls: str, what: str) -> None:
+def _interval_rows(
+    canvas: _Canvas, intervals: list[Interval], cls: str, what: str, name: str
+) -> None:
     ends = [i.end if i.end is not None else canvas.stop for i in intervals]
     index = {id(i): e for i, e in zip(intervals, ends, strict=True)}
-    for lane in _lanes(intervals, lambda i: i.start, lambda i: index[id(i)]):
-        for i in lane:
-            end = index[id(i)]
-            title = (
-                f"{i.resource} {what} {i.name}#{i.action} (priority {i.priority})\n"
-                f"{canvas.rel(i.start)} -> {canvas.rel(end)} s ({end - i.start:.3f} s)"
-                + ("" if i.outcome == "held" else f", {i.outcome.replace('_', ' ')}")
-            )
-            fill = canvas.hue(i.name) if cls == "hold" else ""
-            canvas.bar(cls, i.start, end, title, text=f"{i.name}#{i.action}", fill=fill)
+    current = -1
+    for lane, i, room in canvas.lanes(intervals, lambda i: i.start, lambda i: index[id(i)]):
+        if lane != current:
+            canvas.y += ROW_H if current >= 0 else 0
+            current = lane
+            _lane_label(canvas, name, lane, 1 if cls == "hold" else 2)
+        end = index[id(i)]
+        title = (
+            f"{i.resource} {what} {i.name}#{i.action} (priority {i.priority})\n"
+            f"{canvas.rel(i.start)} -> {canvas.rel(end)} s ({end - i.start:.3f} s)"
+            + ("" if i.outcome == "held" else f", {i.outcome.replace('_', ' ')}")
+        )
+        fill = canvas.hue(i.name) if cls == "hold" else ""
+        canvas.bar(cls, i.start, end, title, text=f"{i.name}#{i.action}", fill=fill, room=room)
+    if current >= 0:
         canvas.y += ROW_H
 
 
@@ -225,9 +363,13 @@ def _draw_resources(canvas: _Canvas) -> None:
         return
     canvas.section("resources")
     for name in names:
-        canvas.parts.append(_svg.label(name, canvas.y, 1))
         top = canvas.y
-        _interval_rows(canvas, [h for h in found.holds if h.resource == name], "hold", "held by")
+        holds = [h for h in found.holds if h.resource == name]
+        if holds:
+            _interval_rows(canvas, holds, "hold", "held by", name)
+        else:
+            canvas.parts.append(_svg.label(name, canvas.y, 1))
+            canvas.y += ROW_H
         for event in found.preemptions:
             if event.data.get("resource") == name:
                 x = canvas.scale.x(event.time)
@@ -237,8 +379,7 @@ def _draw_resources(canvas: _Canvas) -> None:
                 )
         waits = [w for w in found.waits if w.resource == name]
         if waits:
-            canvas.parts.append(_svg.label("waiting", canvas.y, 2))
-            _interval_rows(canvas, waits, "wait", "awaited by")
+            _interval_rows(canvas, waits, "wait", "awaited by", "waiting")
 
 
 def _draw_firings(canvas: _Canvas) -> None:
@@ -257,22 +398,20 @@ def _draw_firings(canvas: _Canvas) -> None:
 def _state_spans(recording: Recording) -> dict[str, list[tuple[float, float]]]:
     """For each boolean state key sampled: the intervals during which it was true."""
     spans: dict[str, list[tuple[float, float]]] = {}
-    since: dict[str, float | None] = {}
-    for event in recording.events:
-        value = event.data.get("value")
-        if event.kind is not EventKind.STATE_SAMPLE or not isinstance(value, bool):
+    for key, series in recording.samples.items():
+        values = series.values
+        if not any(v is True for v in values) or not all(isinstance(v, bool) for v in values):
             continue
-        key = event.name or "?"
-        spans.setdefault(key, [])
-        began = since.get(key)
-        if value and began is None:
-            since[key] = event.time
-        elif not value and began is not None:
-            spans[key].append((began, event.time))
-            since[key] = None
-    for key, began in since.items():
+        found = spans[key] = []
+        began: float | None = None
+        for time, value in zip(series.times, series.values, strict=True):
+            if value and began is None:
+                began = time
+            elif not value and began is not None:
+                found.append((began, time))
+                began = None
         if began is not None:
-            spans[key].append((began, recording.stop))
+            found.append((began, recording.stop))
     return spans
 
 
@@ -285,8 +424,18 @@ def _draw_state(canvas: _Canvas, recording: Recording) -> None:
         canvas.parts.append(_svg.label(key, canvas.y, 1))
         for begin, end in spans[key]:
             title = f"{key} true {canvas.rel(begin)} -> {canvas.rel(end)} s"
-            canvas.bar("state-on", begin, end, title)
+            canvas.bar("state-on", begin, end, title, least=3.0)
         canvas.y += ROW_H
+
+
+def _draw_plots(canvas: _Canvas, recording: Recording) -> None:
+    series = plotted(recording)
+    if not series:
+        return
+    canvas.section("sensors")
+    for one in series:
+        canvas.parts += draw_plot(one, canvas.scale, canvas.y, canvas.stop)
+        canvas.y += ROW
 
 
 def _facts(recording: Recording) -> str:
@@ -294,8 +443,9 @@ def _facts(recording: Recording) -> str:
     o = summary.outcomes
     robot = esc(summary.robot or "unknown robot")
     seed = f", seed {summary.seed}" if summary.seed is not None else ""
+    where = f"{esc(recording.path)} &middot; " if recording.path else ""
     return (
-        f'<p class="facts">{robot}{seed} &middot; {summary.duration:.3f} s &middot; '
+        f'<p class="facts">{where}{robot}{seed} &middot; {summary.duration:.3f} s &middot; '
         f"{summary.actions} actions ({o.succeeded} succeeded, {o.failed} failed, "
         f"{o.cancelled} cancelled, {o.skipped} skipped, {o.not_done} not done) &middot; "
         f"peak concurrency {summary.peak_concurrency} &middot; "
@@ -304,13 +454,30 @@ def _facts(recording: Recording) -> str:
     )
 
 
-def _legend() -> str:
+def _swatches(items: Iterable[tuple[str, str]]) -> str:
+    return "".join(f'<span><i style="background:{c}"></i>{esc(t)}</span>' for t, c in items)
+
+
+def _legend(canvas: _Canvas) -> str:
     swatches = [(name.replace("_", " "), colour) for name, colour in _svg.OUTCOME_COLOURS.items()]
-    swatches += [("waiting for a resource", "#cfd8dc"), ("state true", "#7e57c2")]
-    items = "".join(
-        f'<span><i style="background:{colour}"></i>{text}</span>' for text, colour in swatches
+    swatches += [("waiting for a resource", "#cfd8dc"), ("state true", "#5e35b1")]
+    holders = ""
+    if canvas.holders:
+        holders = (
+            '<p class="legend">resource held by: '
+            + _swatches((name, canvas.hue(name)) for name in canvas.holders)
+            + '<span><i style="background:#000"></i>preempted (triangle)</span></p>'
+        )
+    return f'<p class="legend">actions: {_swatches(swatches)}</p>{holders}'
+
+
+def _map_legend(recording: Recording) -> str:
+    marks = [("bump", "#d50000"), ("cliff", "#ff6f00"), ("preemption", "#000")]
+    marks += [("docked", "#2e7d32"), ("undocked", "#fff")]
+    return (
+        f'<p class="legend">{colour_bar(recording.duration)} '
+        f"{_swatches(marks)}<span>hover the path to see that moment on the timeline</span></p>"
     )
-    return f'<p class="legend">{items}</p>'
 
 
 def _problem(recording: Recording) -> str:
@@ -324,8 +491,15 @@ def _problem(recording: Recording) -> str:
     return ""
 
 
+def page_title(recording: Recording, title: str | None = None) -> str:
+    """The page's title: ``title``, else the recording's file name, else "pyrobots_aio run"."""
+    if title:
+        return title
+    return Path(recording.path).name if recording.path else "pyrobots_aio run"
+
+
 def render_timeline_html(recording: Recording, *, title: str | None = None) -> str:
-    """Draw a recording as a self-contained HTML page (inline SVG and CSS, no script).
+    """Draw a recording as a self-contained HTML page: map, timeline, plots, rates.
 
     Args:
         recording: What to draw.
@@ -334,7 +508,10 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
     Returns:
         The page. Each action is a ``rect`` of class ``action`` plus its outcome
         (``succeeded`` ...), with a tooltip; resource holds are ``rect.hold``,
-        waits ``rect.wait``, monitor firings ``line.firing``.
+        waits ``rect.wait``, monitor firings ``line.firing``; on the map
+        (``svg.map``), the path is ``polyline.trail`` and the marks
+        ``path.mark``; the sensor plots are ``polyline.plot`` and
+        ``polygon.plot.bool``.
 
     Example:
         >>> from pyrobots_aio.recording import load, render_timeline_html
@@ -347,7 +524,10 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
     _draw_resources(canvas)
     _draw_firings(canvas)
     _draw_state(canvas, recording)
-    heading = title or recording.path or "pyrobots_aio run"
+    _draw_plots(canvas, recording)
+    heading = page_title(recording, title)
+    arena = render_map(recording, found)
+    where = ["<h2>Where the robot went</h2>", _map_legend(recording), arena] if arena else []
     return "\n".join(
         [
             "<!DOCTYPE html>",
@@ -356,11 +536,13 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
             f"<h1>{esc(heading)}</h1>",
             _facts(recording),
             _problem(recording),
-            _legend(),
-            "<h2>Timeline of actions and resources</h2>",
+            *where,
+            "<h2>Timeline of actions, resources and sensors</h2>",
+            _legend(canvas),
             canvas.svg(),
-            "<h2>Actions and events per minute</h2>",
-            rate_chart(recording, found),
+            "<h2>Actions started and events</h2>",
+            rate_chart(recording, found, canvas.scale),
+            f"<script>{_SCRIPT}</script>",
             "</body></html>",
             "",
         ]

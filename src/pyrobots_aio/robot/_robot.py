@@ -23,6 +23,7 @@ from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager
 from ..state import StateStore
+from ._live import LiveView
 from ._monitoring import StateMethods
 
 if TYPE_CHECKING:
@@ -49,6 +50,9 @@ class Robot(StateMethods):
             cancelled again; after a second grace it is abandoned.
         instruments: Instruments receiving every executive event (recorders).
         backend: The backend that connects this robot to hardware or a simulator.
+        serve: A TCP port: while the robot runs, stream it live on 127.0.0.1 over
+            Foxglove's WebSocket protocol (the ``live`` extra); 0 picks a free port,
+            which ``robot.live.port`` tells once the robot runs.
 
     Example:
         >>> import asyncio
@@ -73,6 +77,7 @@ class Robot(StateMethods):
         cancel_grace: float = 2.0,
         instruments: Iterable[Instrument] = (),
         backend: Backend | None = None,
+        serve: int | None = None,
     ) -> None:
         self._attached: dict[str, Action[Any, Any, Any]] = {}
         self.dummy = dummy
@@ -92,6 +97,7 @@ class Robot(StateMethods):
         self.events = EventManager(self, self._state, self._executive, self.instruments)
         self.poses = PoseManager()
         self.backend = backend
+        self.live = None if serve is None else LiveView(serve)
         for item in actions:
             self._attach(item)
 
@@ -185,18 +191,29 @@ class Robot(StateMethods):
             await self._stop()
 
     async def _start(self) -> None:
-        """Start what the robot owns (the backend); subclasses extend this."""
-        if self.backend is not None:
-            await self.backend.start(self)
+        """Start what the robot owns (the live view, the backend); subclasses extend this."""
+        if self.live is not None:
+            self.live.start(self)
+        try:
+            if self.backend is not None:
+                await self.backend.start(self)
+        except BaseException:
+            if self.live is not None:
+                self.live.stop()
+            raise
 
     async def _stop_monitoring(self) -> None:
         """Stop event monitors before actions are cancelled; subclasses extend this."""
         await self.events.cancel_all()
 
     async def _stop(self) -> None:
-        """Stop the backend once every action is done; subclasses extend this."""
-        if self.backend is not None:
-            await self.backend.stop()
+        """Stop the backend once every action is done, then the live view; subclasses extend it."""
+        try:
+            if self.backend is not None:
+                await self.backend.stop()
+        finally:
+            if self.live is not None:
+                self.live.stop()
 
     # -- from other threads -----------------------------------------------
 

@@ -400,6 +400,50 @@ class SimWorld:
             )
         return _matrix(self._data.site_xpos[index], self._data.site_xmat[index])
 
+    def floor_plan(self) -> list[dict[str, Any]]:
+        """Return the static shapes the robot can run into, seen from above, in the map frame.
+
+        Each solid geom fixed to the world (walls, obstacles, the dock; not the
+        floor, nor the robot) as a JSON-friendly dict: ``name``, ``kind`` (its
+        material's name, else its own: ``wall``, ``obstacle``, ``dock`` in the
+        shipped arena), ``x``, ``y`` and ``yaw`` of its centre, ``rgba``, and
+        ``shape``: ``"box"`` with ``half`` ``[hx, hy]``, or ``"circle"`` with
+        ``radius`` (cylinders; other shapes by their bounding radius). Replay
+        draws its map from this.
+
+        Example:
+            >>> world = SimWorld()
+            >>> [s["name"] for s in world.floor_plan() if s["kind"] == "dock"]
+            ['dock']
+        """
+        mujoco, model, data = self._mujoco, self._model, self._data
+        shapes = []
+        for geom in range(model.ngeom):
+            static = model.body_weldid[model.geom_bodyid[geom]] == 0
+            solid = model.geom_contype[geom] or model.geom_conaffinity[geom]
+            if not static or not solid or model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_PLANE:
+                continue
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, geom) or f"geom{geom}"
+            material = model.geom_matid[geom]
+            kind = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_MATERIAL, material) or name
+            rgba = model.mat_rgba[material] if material >= 0 else model.geom_rgba[geom]
+            x, y, _ = data.geom_xpos[geom].tolist()
+            rot = data.geom_xmat[geom]
+            shape: dict[str, Any] = {"name": name, "kind": kind, "x": x, "y": y}
+            shape.update(
+                yaw=math.atan2(float(rot[3]), float(rot[0])),
+                rgba=[round(float(c), 3) for c in rgba],
+            )
+            size = model.geom_size[geom]
+            if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX:
+                shape.update(shape="box", half=[float(size[0]), float(size[1])])
+            elif model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+                shape.update(shape="circle", radius=float(size[0]))
+            else:
+                shape.update(shape="circle", radius=float(model.geom_rbound[geom]))
+            shapes.append(shape)
+        return shapes
+
     # --- internals -------------------------------------------------------------------
 
     def _reset_to_home(self) -> None:

@@ -1,0 +1,305 @@
+"""The map of the replay page: the arena seen from above, the robot's path, what happened where.
+
+Drawn from the recording alone: the arena from the header's floor plan (the
+MuJoCo model's static geoms, recorded by a simulated robot's recorder), to
+scale with a scale bar; the path from the recorded poses, coloured by time
+(`_svg.ramp`); marks for bumps, cliffs, preemptions, undocking and docking at
+the pose of their moment. Everything is in pixels: ``data-ox``, ``data-oy``
+and ``data-scale`` on the ``svg.map`` give the map frame back
+(``x = (px - ox) / scale``, ``y = (oy - py) / scale``), and ``data-track``
+holds the path as ``t,x,y`` triples for the page's hover script.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from . import _svg
+from ._svg import esc
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping, Sequence
+
+    from ._analysis import Analysis
+    from ._recording import Recording
+
+SIZE = 560
+"""Pixels of the longer side of the arena."""
+MARGIN = 24
+STEP_PX = 1.5
+"""The path keeps a point once it is this many pixels from the last one kept."""
+MAX_TRACK = 3000
+"""Most ``t,x,y`` triples given to the hover script."""
+
+
+@dataclass(frozen=True, slots=True)
+class Mark:
+    """Something that happened at a moment, drawn where the robot was then."""
+
+    kind: str
+    time: float
+    text: str
+
+
+def _number(value: object) -> float | None:
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def _shape(raw: Mapping[str, Any]) -> dict[str, Any] | None:
+    """A floor-plan shape with checked numbers, or None if it is malformed."""
+    x, y, yaw = _number(raw.get("x")), _number(raw.get("y")), _number(raw.get("yaw", 0.0))
+    if x is None or y is None or yaw is None:
+        return None
+    shape: dict[str, Any] = {"x": x, "y": y, "yaw": yaw, "name": str(raw.get("name", "?"))}
+    shape["kind"] = str(raw.get("kind", "obstacle"))
+    half = raw.get("half")
+    radius = _number(raw.get("radius"))
+    if raw.get("shape") == "box" and isinstance(half, list) and len(half) == 2:
+        hx, hy = _number(half[0]), _number(half[1])
+        if hx is None or hy is None:
+            return None
+        c, s = math.cos(yaw), math.sin(yaw)
+        shape["corners"] = [
+            (x + c * dx - s * dy, y + s * dx + c * dy)
+            for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
+        ]
+    elif radius is not None and radius >= 0:
+        shape["radius"] = radius
+    else:
+        return None
+    rgba = raw.get("rgba")
+    values = [_number(v) for v in rgba] if isinstance(rgba, list) and len(rgba) == 4 else []
+    channels = [v for v in values[:3] if v is not None]
+    if len(values) == 4 and len(channels) == 3:
+        r, g, b = (round(255 * min(1.0, max(0.0, v))) for v in channels)
+        shape["fill"] = f"#{r:02x}{g:02x}{b:02x}"
+    return shape
+
+
+def _extent(shapes: Sequence[dict[str, Any]], recording: Recording) -> tuple[float, ...] | None:
+    xs, ys = list(recording.poses.x), list(recording.poses.y)
+    for shape in shapes:
+        if "corners" in shape:
+            xs += [c[0] for c in shape["corners"]]
+            ys += [c[1] for c in shape["corners"]]
+        else:
+            xs += [shape["x"] - shape["radius"], shape["x"] + shape["radius"]]
+            ys += [shape["y"] - shape["radius"], shape["y"] + shape["radius"]]
+    if not xs:
+        return None
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+class _Frame:
+    """Map metres to pixels: x to the right, y up."""
+
+    def __init__(self, extent: tuple[float, ...]) -> None:
+        x0, y0, x1, y1 = extent
+        span = max(x1 - x0, y1 - y0, 1e-3)
+        self.scale = SIZE / span
+        self.ox = MARGIN - x0 * self.scale
+        self.oy = MARGIN + y1 * self.scale
+        self.width = MARGIN * 2 + (x1 - x0) * self.scale
+        self.height = MARGIN * 2 + (y1 - y0) * self.scale + 40  # the scale bar below
+
+    def px(self, x: float, y: float) -> tuple[float, float]:
+        return self.ox + x * self.scale, self.oy - y * self.scale
+
+
+def _draw_shape(frame: _Frame, shape: dict[str, Any]) -> str:
+    kind = _svg.css_class(shape["kind"], "obstacle")
+    fill = f' style="fill:{shape["fill"]}"' if "fill" in shape else ""
+    title = f"<title>{esc(shape['name'])} ({esc(shape['kind'])})</title>"
+    if "corners" in shape:
+        points = " ".join(
+            f"{px:.1f},{py:.1f}" for px, py in (frame.px(*c) for c in shape["corners"])
+        )
+        return f'<polygon class="shape {kind}" points="{points}"{fill}>{title}</polygon>'
+    cx, cy = frame.px(shape["x"], shape["y"])
+    r = shape["radius"] * frame.scale
+    circle = f'<circle class="shape {kind}" cx="{cx:.1f}" cy="{cy:.1f}" r="{r:.1f}"'
+    return f"{circle}{fill}>{title}</circle>"
+
+
+def _kept(frame: _Frame, recording: Recording) -> list[int]:
+    """Indices of the poses drawn: each at least `STEP_PX` from the one before, and the last."""
+    poses, kept = recording.poses, []
+    last_x = last_y = math.inf
+    limit = (STEP_PX / frame.scale) ** 2
+    for i, (x, y) in enumerate(zip(poses.x, poses.y, strict=True)):
+        if (x - last_x) ** 2 + (y - last_y) ** 2 >= limit:
+            kept.append(i)
+            last_x, last_y = x, y
+    if kept and kept[-1] != len(poses) - 1:
+        kept.append(len(poses) - 1)
+    return kept
+
+
+def _trail(frame: _Frame, recording: Recording, kept: list[int]) -> list[str]:
+    """The path as polylines of about 2 pixels of colour each, coloured by time."""
+    poses = recording.poses
+    start, duration = recording.start, recording.duration or 1.0
+    pieces = max(1, min(len(kept) - 1, 240))
+    per = (len(kept) - 1) / pieces
+    parts = ['<g class="trail">']
+    for piece in range(pieces):
+        chunk = kept[round(piece * per) : round((piece + 1) * per) + 1]
+        if len(chunk) < 2:
+            continue
+        points = " ".join("{:.1f},{:.1f}".format(*frame.px(poses.x[i], poses.y[i])) for i in chunk)
+        t0, t1 = poses.times[chunk[0]] - start, poses.times[chunk[-1]] - start
+        colour = _svg.ramp(((t0 + t1) / 2) / duration)
+        parts.append(
+            f'<polyline class="trail" points="{points}" style="stroke:{colour}" '
+            f'data-t0="{t0:.3f}" data-t1="{t1:.3f}"><title>{t0:.1f} to {t1:.1f} s</title>'
+            "</polyline>"
+        )
+    parts.append("</g>")
+    return parts
+
+
+def _rising(times: Sequence[float], values: Sequence[object]) -> Iterable[tuple[float, bool]]:
+    """Each change of a boolean series after its first value: (time, new value)."""
+    previous: object = None
+    for i, (time, value) in enumerate(zip(times, values, strict=True)):
+        if i and isinstance(value, bool) and value is not previous:
+            yield time, value
+        previous = value
+
+
+def marks(recording: Recording, found: Analysis) -> list[Mark]:
+    """Bumps, cliffs, preemptions, undocking and docking, in time order."""
+    found_marks: list[Mark] = []
+    bumper = recording.samples.get("bumper")
+    if bumper is not None:
+        sides = ("bumper_left", "bumper_right")
+        for time, value in _rising(bumper.times, bumper.values):
+            if value:
+                hit = [s.removeprefix("bumper_") for s in sides if _value_at(recording, s, time)]
+                found_marks.append(Mark("bump", time, f"bump ({' and '.join(hit) or 'bumper'})"))
+    for key, series in recording.samples.items():
+        if key.startswith("cliff_"):
+            found_marks += [
+                Mark("cliff", t, f"cliff: {key}")
+                for t, v in _rising(series.times, series.values)
+                if v
+            ]
+    docked = recording.samples.get("docked")
+    if docked is not None:
+        found_marks += [
+            Mark("dock" if v else "undock", t, "docked" if v else "undocked")
+            for t, v in _rising(docked.times, docked.values)
+        ]
+    for event in found.preemptions:
+        victim = found.label(event.action) or "?"
+        found_marks.append(
+            Mark("preempt", event.time, f"{victim} preempted for {event.data.get('resource')!r}")
+        )
+    return sorted(found_marks, key=lambda m: m.time)
+
+
+def _value_at(recording: Recording, key: str, time: float) -> object:
+    series = recording.samples.get(key)
+    if series is None:
+        return None
+    i = bisect.bisect_right(series.times, time) - 1
+    return series.values[i] if i >= 0 else None
+
+
+def _pose_at(recording: Recording, time: float) -> tuple[float, float] | None:
+    poses = recording.poses
+    i = bisect.bisect_right(poses.times, time) - 1
+    if not len(poses):
+        return None
+    i = max(0, i)
+    return poses.x[i], poses.y[i]
+
+
+_SYMBOLS = {
+    "bump": "M-6,-6 L6,6 M-6,6 L6,-6",
+    "cliff": "M0,-7 L7,6 L-7,6 Z",
+    "preempt": "M-5,-7 h10 l-5,8 z",
+    "dock": "M-5,-5 h10 v10 h-10 z",
+    "undock": "M-5,-5 h10 v10 h-10 z",
+}
+
+
+def _draw_marks(frame: _Frame, recording: Recording, found: Analysis) -> list[str]:
+    parts = ['<g class="marks">']
+    start = recording.start
+    for mark in marks(recording, found):
+        where = _pose_at(recording, mark.time)
+        if where is None:
+            continue
+        px, py = frame.px(*where)
+        t = mark.time - start
+        parts.append(
+            f'<path class="mark {mark.kind}" transform="translate({px:.1f},{py:.1f})" '
+            f'd="{_SYMBOLS[mark.kind]}" data-t="{t:.3f}">'
+            f"<title>{esc(mark.text)} at {t:.3f} s</title></path>"
+        )
+    parts.append("</g>")
+    return parts
+
+
+def _scale_bar(frame: _Frame) -> str:
+    metres = _svg.nice_step(SIZE / frame.scale, 4)
+    length = metres * frame.scale
+    y = frame.height - 22
+    return (
+        f'<g class="scalebar"><line x1="{MARGIN}" y1="{y:.1f}" x2="{MARGIN + length:.1f}" '
+        f'y2="{y:.1f}"/><line x1="{MARGIN}" y1="{y - 4:.1f}" x2="{MARGIN}" y2="{y + 4:.1f}"/>'
+        f'<line x1="{MARGIN + length:.1f}" y1="{y - 4:.1f}" x2="{MARGIN + length:.1f}" '
+        f'y2="{y + 4:.1f}"/><text x="{MARGIN + length + 6:.1f}" y="{y + 4:.1f}">{metres:g} m</text>'
+        "</g>"
+    )
+
+
+def _track(recording: Recording, kept: list[int]) -> str:
+    poses, start = recording.poses, recording.start
+    every = max(1, math.ceil(len(kept) / MAX_TRACK))
+    picked = kept[::every]
+    if kept and picked[-1] != kept[-1]:
+        picked.append(kept[-1])
+    return ";".join(
+        f"{poses.times[i] - start:.3f},{poses.x[i]:.4f},{poses.y[i]:.4f}" for i in picked
+    )
+
+
+def render_map(recording: Recording, found: Analysis) -> str:
+    """The map's SVG, or "" when the recording has neither a floor plan nor poses."""
+    shapes = [s for raw in recording.header.floor_plan if (s := _shape(raw)) is not None]
+    extent = _extent(shapes, recording)
+    if extent is None:
+        return ""
+    frame = _Frame(extent)
+    kept = _kept(frame, recording)
+    parts = ['<g class="arena">', *(_draw_shape(frame, s) for s in shapes), "</g>"]
+    parts += _trail(frame, recording, kept)
+    parts += _draw_marks(frame, recording, found)
+    if kept:
+        px, py = frame.px(recording.poses.x[kept[0]], recording.poses.y[kept[0]])
+        parts.append(
+            f'<circle class="start" cx="{px:.1f}" cy="{py:.1f}" r="4"><title>start</title></circle>'
+        )
+    parts.append('<circle class="here" cx="-99" cy="-99" r="7"/>')
+    parts.append(_scale_bar(frame))
+    return (
+        f'<svg class="map" xmlns="http://www.w3.org/2000/svg" '
+        f'viewBox="0 0 {frame.width:.0f} {frame.height:.0f}" width="{frame.width:.0f}" '
+        f'height="{frame.height:.0f}" data-ox="{frame.ox:.4f}" data-oy="{frame.oy:.4f}" '
+        f'data-scale="{frame.scale:.6f}" data-track="{_track(recording, kept)}">'
+        + "".join(parts)
+        + "</svg>"
+    )
+
+
+def colour_bar(duration: float) -> str:
+    """The legend of the path's colours: start to end of the run."""
+    stops = "".join(f'<i style="background:{_svg.ramp(i / 9)}"></i>' for i in range(10))
+    return f'<span class="ramp">path: 0 s {stops} {duration:.0f} s</span>'

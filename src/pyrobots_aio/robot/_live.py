@@ -1,0 +1,164 @@
+"""``Robot(serve=PORT)``: the running robot, live in Foxglove, over its WebSocket protocol.
+
+The live view publishes the channels of the MCAP recorder (`channels`): the
+executive's events, each state key at each write, the pose, ``/tf`` and log
+lines, through Foxglove's own SDK (the ``live`` extra, ``foxglove-sdk``), on
+127.0.0.1 unless told otherwise. It runs from ``async with robot`` to its end,
+when its server is stopped and its port closed. (The SDK serves from one
+runtime of native threads per process, shared by every server, idle once they
+stop, shut down by the SDK at exit: no Python thread, and none more per robot.)
+Only the state writes and events of the robot's loop thread are published, in
+that thread; publishing costs a JSON encoding and a queue push per message.
+"""
+
+from __future__ import annotations
+
+import datetime
+import logging
+from typing import TYPE_CHECKING, Any
+
+from .._exceptions import PyRobotsError
+from .channels import FIXED_CHANNELS, SCHEMAS, FoxgloveChannels, LogForwarder, strict_json
+from .sampling import StateSampler
+
+if TYPE_CHECKING:
+    from types import ModuleType
+
+    from .._core._instrument import ExecEvent
+    from ._robot import Robot
+    from .channels import Message
+    from .sampling import Pose2D
+
+_log = logging.getLogger("pyrobots_aio.live")
+LOGGER = "pyrobots_aio"
+"""The logger whose records are published on ``/pyrobots/log``."""
+
+
+def _sdk() -> ModuleType:
+    try:
+        import foxglove
+    except ImportError as exc:
+        msg = (
+            "Robot(serve=...) needs Foxglove's SDK, which is optional: install it with "
+            'pip install -e ".[live]" from a checkout (or pip install foxglove-sdk)'
+        )
+        raise PyRobotsError(msg) from exc
+    return foxglove
+
+
+def checked_port(port: object) -> int:
+    """``port`` if it is a TCP port number (0: any free port).
+
+    Raises:
+        ValueError: It is not an integer from 0 to 65535.
+    """
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+        msg = f"serve must be a TCP port number from 0 to 65535 (0: any free port), got {port!r}"
+        raise ValueError(msg)
+    return port
+
+
+class LiveView:
+    """A Foxglove WebSocket server streaming one robot's run while it runs.
+
+    Args:
+        port: The TCP port (0: any free one; `port` tells which once started).
+        host: The address to listen on (default: this machine only).
+    """
+
+    def __init__(self, port: int, host: str = "127.0.0.1") -> None:
+        self._foxglove = _sdk()
+        self.requested = checked_port(port)
+        self.host = host
+        self._server: Any = None
+        self._context: Any = None
+        self._channels: dict[str, Any] = {}
+        self._robot: Robot | None = None
+        self._encoder = FoxgloveChannels(0, 0.0)
+        self._sampler = StateSampler(self._samples)
+        self._forwarder: LogForwarder | None = None
+
+    @property
+    def port(self) -> int | None:
+        """The port served on, while serving."""
+        return None if self._server is None else int(self._server.port)
+
+    def start(self, robot: Robot) -> None:
+        """Start serving ``robot``'s channels.
+
+        Raises:
+            PyRobotsError: The server cannot listen (the port is taken ...).
+        """
+        fox = self._foxglove
+        self._context = fox.Context()
+        try:
+            self._server = fox.start_server(
+                name=f"pyrobots_aio {type(robot).__name__}",
+                host=self.host,
+                port=self.requested,
+                context=self._context,
+            )
+        except Exception as exc:  # the SDK raises RuntimeError and others
+            self._context = None
+            msg = f"cannot serve the live view on {self.host}:{self.requested}: {exc}"
+            raise PyRobotsError(msg) from exc
+        # Wall-clock start, so that Foxglove shows the date; never used for timing.
+        origin = round(datetime.datetime.now(datetime.UTC).timestamp() * 1e9)
+        self._encoder = FoxgloveChannels(origin, robot.time(), self._sampler.pose_frame or "")
+        for topic, schema in FIXED_CHANNELS.items():
+            self._channel(topic, schema)
+        self._robot = robot
+        robot.instruments.add(self)
+        self._sampler.start(robot)
+        self._encoder.frame = self._sampler.pose_frame or "base_link"
+        self._forwarder = LogForwarder(self._encoder, self._send)
+        logging.getLogger(LOGGER).addHandler(self._forwarder)
+        _log.info("live view on ws://%s:%s (open it in Foxglove)", self.host, self.port)
+
+    def stop(self) -> None:
+        """Stop serving; nothing of the server is left running."""
+        if self._forwarder is not None:
+            logging.getLogger(LOGGER).removeHandler(self._forwarder)
+            self._forwarder = None
+        self._sampler.stop()
+        if self._robot is not None:
+            self._robot.instruments.remove(self)
+            self._robot = None
+        server, self._server = self._server, None
+        if server is not None:
+            server.stop()
+        for channel in self._channels.values():
+            channel.close()
+        self._channels.clear()
+        self._context = None
+
+    def _channel(self, topic: str, schema: str) -> Any:
+        channel = self._channels.get(topic)
+        if channel is None:
+            fox = self._foxglove
+            definition = fox.Schema(
+                name=schema, encoding="jsonschema", data=strict_json(SCHEMAS[schema])
+            )
+            channel = fox.Channel(
+                topic, schema=definition, message_encoding="json", context=self._context
+            )
+            self._channels[topic] = channel
+        return channel
+
+    def _send(self, message: Message) -> None:
+        if self._server is None:
+            return
+        self._channel(message.topic, message.schema).log(message.data, log_time=message.log_time)
+
+    def on_event(self, event: ExecEvent) -> None:
+        """Publish one executive event (the robot's instruments call this)."""
+        for message in self._encoder.event(event):
+            self._send(message)
+
+    def _samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+        for message in self._encoder.samples(time, values, pose):
+            self._send(message)
+
+    def __repr__(self) -> str:
+        where = f"ws://{self.host}:{self.port}" if self._server is not None else "stopped"
+        return f"<LiveView {where}>"

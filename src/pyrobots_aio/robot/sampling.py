@@ -1,0 +1,137 @@
+"""Sampling a robot's state and pose at each write of its state (recorders, the live view).
+
+A simulated robot writes every sensor in one batch per control tick, so a
+sampler subscribed to the state sees each tick once: it passes on the values
+that changed (or, downsampled, those due) and the pose of a frame in ``map``.
+The recorders (`pyrobots_aio.recording`) and ``Robot(serve=...)`` share it, so
+a recording and the live view carry the same samples.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from .._exceptions import UnknownFrameError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping
+
+    from ..state import Subscription
+    from ._robot import Robot
+
+__all__ = ["POSE_EPSILON", "Pose2D", "StateSampler"]
+
+Pose2D = tuple[float, float, float]
+"""``(x, y, yaw)`` in the map frame (metres, radians)."""
+_MISSING = object()
+POSE_EPSILON = 1e-9
+"""A pose that moved less than this (metres and radians) is not sampled again."""
+
+
+_SCALARS = frozenset({bool, int, float, str, type(None)})
+"""Types whose equal values are the same sample (others, numpy arrays ..., always count)."""
+
+
+class StateSampler:
+    """Calls ``sink(time, values, pose)`` for each write of a robot's state that brings news.
+
+    Args:
+        sink: Receives the loop time of the write, the watched values that
+            changed (or are due), and the pose (None if not due or not known).
+        keys: The keys to pass on (None: every key).
+        period: Least seconds between two samples of a number, or of the pose
+            (0: every change). Discrete values (booleans, strings ...) are passed
+            on at every change whatever the period.
+        pose_frame: The frame whose pose in ``map`` goes with each write (None: none).
+    """
+
+    def __init__(
+        self,
+        sink: Callable[[float, dict[str, object], Pose2D | None], None],
+        *,
+        keys: frozenset[str] | None = None,
+        period: float = 0.0,
+        pose_frame: str | None = "base_link",
+    ) -> None:
+        self._sink = sink
+        self._watched = keys
+        self._period = period
+        self.pose_frame = pose_frame
+        self._robot: Robot | None = None
+        self._subscription: Subscription | None = None
+        self._values: dict[str, object] = {}
+        self._stamps: dict[str, float] = {}
+        self._pose: Pose2D | None = None
+        self._pose_stamp = -math.inf
+
+    def start(self, robot: Robot) -> None:
+        """Sample ``robot`` from now on, starting with the values it holds.
+
+        The pose is sampled only if ``robot.poses`` knows the frame now
+        (`pose_frame` is set to None otherwise).
+        """
+        self._robot = robot
+        frame = self.pose_frame
+        self.pose_frame = frame if frame is not None and frame in robot.poses.frames() else None
+        if self._watched is not None and not self._watched and self.pose_frame is None:
+            return
+        store = robot.state
+        self._subscription = store.subscribe(self._on_write, keys=None)
+        present = {key: store[key] for key in store}
+        if present:
+            self._on_write(present)
+
+    def stop(self) -> None:
+        """Stop sampling."""
+        if self._subscription is not None:
+            self._subscription.close()
+            self._subscription = None
+        self._robot = None
+
+    def _on_write(self, changes: Mapping[str, object]) -> None:
+        robot = self._robot
+        if robot is None or not changes:
+            return
+        now = robot.state.timestamp(next(iter(changes)))
+        watched, values, stamps, period = self._watched, self._values, self._stamps, self._period
+        due: dict[str, object] = {}
+        for key, value in changes.items():
+            if watched is not None and key not in watched:
+                continue
+            old = values.get(key, _MISSING)
+            if old is not _MISSING:
+                kind = type(value)
+                if kind is type(old) and kind in _SCALARS and old == value:
+                    continue  # the same sample again
+                number = kind is not bool and isinstance(value, int | float)
+                if period and number and now - stamps[key] < period:
+                    continue
+            values[key] = value
+            stamps[key] = now
+            due[key] = value
+        pose = self._pose_due(robot, now) if self.pose_frame is not None else None
+        if due or pose is not None:
+            self._sink(now, due, pose)
+
+    def _pose_due(self, robot: Robot, now: float) -> Pose2D | None:
+        if now - self._pose_stamp < self._period or self.pose_frame is None:
+            return None
+        try:
+            matrix = robot.poses.get_transform(self.pose_frame)
+        except UnknownFrameError:
+            return None
+        (r0, _, _, x), (r1, _, _, y) = matrix[:2].tolist()
+        yaw = math.atan2(r1, r0)
+        old = self._pose
+        if old is not None and (
+            abs(old[0] - x) < POSE_EPSILON
+            and abs(old[1] - y) < POSE_EPSILON
+            and abs(old[2] - yaw) < POSE_EPSILON
+        ):
+            return None  # still
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
+            return None
+        pose = self._pose = (x, y, yaw)
+        self._pose_stamp = now
+        return pose

@@ -1,0 +1,107 @@
+"""``demo random-walk --record PATH.jsonl|PATH.mcap`` and ``--serve``, run as a user would."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import re
+import signal
+import struct
+import subprocess
+import sys
+from typing import TYPE_CHECKING
+
+import pytest
+import websockets
+
+from pyrobots_aio.recording import load, summarize
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk"]
+
+
+def _demo(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [*COMMAND, *args], capture_output=True, text=True, timeout=300, check=False
+    )
+
+
+@pytest.mark.parametrize("name", ["walk.txt", "walk", "walk.json", "walk.mcap.gz"])
+def test_an_unknown_extension_is_refused(tmp_path: Path, name: str) -> None:
+    done = _demo("--record", str(tmp_path / name))
+    assert (done.returncode, done.stdout) == (2, "")
+    assert (
+        f"error: argument --record: cannot tell the format of '{tmp_path / name}' from its "
+        "extension: use .jsonl or .mcap (JSON Lines or MCAP)"
+    ) in done.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_extension_picks_the_format_and_both_replay_alike(tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    runs = {}
+    for name in ("walk.mcap", "walk.jsonl"):
+        done = _demo("--duration", "20", "--seed", "4", "--record", str(tmp_path / name))
+        assert done.returncode == 0, done.stderr
+        runs[name] = load(tmp_path / name)
+    mcap = (tmp_path / "walk.mcap").read_bytes()
+    assert mcap.startswith(b"\x89MCAP0\r\n")
+    with (tmp_path / "walk.mcap").open("rb") as file:
+        summary = make_reader(file).get_summary()
+    assert summary is not None
+    topics = {c.topic for c in summary.channels.values()}
+    assert {"/pyrobots/pose", "/tf", "/pyrobots/log", "/pyrobots/state/v"} <= topics
+    assert summarize(runs["walk.mcap"]) == summarize(runs["walk.jsonl"])  # the same seeded run
+    assert runs["walk.mcap"].header.floor_plan == runs["walk.jsonl"].header.floor_plan
+
+
+async def _watch(port: int) -> dict[str, list[dict[str, object]]]:
+    """Subscribe to the pose and the actions; return what came once both did."""
+    url = f"ws://127.0.0.1:{port}"
+    protocol = websockets.Subprotocol("foxglove.sdk.v1")
+    got: dict[str, list[dict[str, object]]] = {}
+    async with websockets.connect(url, subprotocols=[protocol]) as ws:
+        topics: dict[int, str] = {}
+        while not {"/pyrobots/pose", "/pyrobots/actions"} <= set(got):
+            frame = await ws.recv()
+            if isinstance(frame, str):
+                body = json.loads(frame)
+                for channel in body.get("channels", []) if body["op"] == "advertise" else []:
+                    if channel["topic"] in {"/pyrobots/pose", "/pyrobots/actions"}:
+                        ident = len(topics) + 1
+                        topics[ident] = channel["topic"]
+                        subscribe = [{"id": ident, "channelId": channel["id"]}]
+                        await ws.send(json.dumps({"op": "subscribe", "subscriptions": subscribe}))
+            else:
+                _, ident, _ = struct.unpack_from("<BIQ", frame)
+                got.setdefault(topics[ident], []).append(json.loads(frame[13:]))
+    return got
+
+
+def test_serve_streams_the_run_live(tmp_path: Path) -> None:
+    with subprocess.Popen(
+        [*COMMAND, "--realtime", "--serve", "0", "--duration", "30"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    ) as demo:
+        try:
+            assert demo.stderr is not None
+            port = None
+            for line in demo.stderr:  # the console log says where it serves
+                found = re.search(r"live view on ws://127\.0\.0\.1:(\d+)", line)
+                if found:
+                    port = int(found.group(1))
+                    break
+            assert port is not None
+            got = asyncio.run(asyncio.wait_for(_watch(port), 60))  # a hang guard
+        finally:
+            demo.send_signal(signal.SIGINT)
+            demo.wait(timeout=60)
+    assert {p["frame_id"] for p in got["/pyrobots/pose"]} == {"map"}
+    first = got["/pyrobots/actions"][0]  # whatever the walk was doing when the client came
+    assert str(first["kind"]).startswith("action.")
+    assert first["name"] in {"undock", "drive_distance", "move", "rotate_angle"}

@@ -1,0 +1,270 @@
+"""The replay page in a real headless browser (chromium), looked at as a person would.
+
+Chromium lays the page out and runs its script; a probe script added to a copy
+of the page measures what was drawn (the path's bounding box in the map
+frame, element counts) and the screenshot is checked for the colours of the
+bars, the dock, the path and the bump marks.
+
+Without a browser on PATH these tests are skipped, with the reason; under CI
+(``.ci/run`` installs chromium and sets ``PYROBOTS_BROWSER_REQUIRED=1``) a
+missing browser fails them instead.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import struct
+import subprocess
+import zlib
+from collections import Counter
+from typing import TYPE_CHECKING
+
+import pytest
+
+from pyrobots_aio.recording import JsonlRecorder, load, render_timeline_html
+from pyrobots_aio.recording._analysis import analyse
+from pyrobots_aio.recording._map import STEP_PX, marks
+from pyrobots_aio.recording._plots import plotted
+from pyrobots_aio.sim import SimRobot, run
+from pyrobots_aio.sim.random_walk import random_walk
+
+if TYPE_CHECKING:
+    from collections.abc import Awaitable, Callable
+    from pathlib import Path
+
+    from conftest import Played
+    from pyrobots_aio.recording import Recorder, Recording
+
+    Scenario = Callable[[Recorder], Awaitable[Played]]
+
+REQUIRED = "PYROBOTS_BROWSER_REQUIRED"
+BROWSER_HELP = (
+    "no headless browser: the page test needs chromium on PATH (Debian: apt-get install "
+    "chromium) or PYROBOTS_CHROMIUM naming one"
+)
+GREEN, ORANGE, RED = (0x43, 0xA0, 0x47), (0xFB, 0x8C, 0x00), (0xE5, 0x39, 0x35)
+DOCK, BUMP = (0x33, 0x33, 0x38), (0xD5, 0x00, 0x00)
+PROBE = """<script>
+function hover(map) {
+  // Move the mouse over the first bump mark, then over the timeline at that mark's time.
+  var mark = map.querySelector("path.mark.bump"), t = +mark.dataset.t;
+  var timeline = document.querySelector("svg.timeline"), cursor = timeline.querySelector(".cursor");
+  var at = mark.getBoundingClientRect(), here = map.querySelector(".here");
+  map.dispatchEvent(new MouseEvent("mousemove", {
+    clientX: at.left + at.width / 2, clientY: at.top + at.height / 2, bubbles: true
+  }));
+  var fromMap = {cursor: +cursor.getAttribute("x1"), shown: cursor.style.display !== "none"};
+  here.setAttribute("cx", "-99");
+  var point = timeline.createSVGPoint();
+  point.x = +timeline.dataset.x0 + t / +timeline.dataset.duration * +timeline.dataset.w;
+  point.y = 60;
+  var screen = point.matrixTransform(timeline.getScreenCTM());
+  timeline.dispatchEvent(new MouseEvent("mousemove", {
+    clientX: screen.x, clientY: screen.y, bubbles: true
+  }));
+  var box = here.getBoundingClientRect();
+  return {
+    t: t, cursor: fromMap.cursor, shown: fromMap.shown, expected: point.x,
+    here: [
+      box.left + box.width / 2 - at.left - at.width / 2,
+      box.top + box.height / 2 - at.top - at.height / 2
+    ]
+  };
+}
+window.addEventListener("load", function () {
+  var map = document.querySelector("svg.map"), box = map.querySelector("g.trail").getBBox();
+  var k = +map.dataset.scale, ox = +map.dataset.ox, oy = +map.dataset.oy;
+  var count = function (selector) { return document.querySelectorAll(selector).length; };
+  var out = document.createElement("pre");
+  out.id = "probe";
+  out.textContent = JSON.stringify({
+    x: [(box.x - ox) / k, (box.x + box.width - ox) / k],
+    y: [(oy - box.y - box.height) / k, (oy - box.y) / k],
+    trail: count("svg.map polyline.trail"), shapes: count("svg.map .shape"),
+    dock: count("svg.map .shape.dock"), bumps: count("svg.map path.mark.bump"),
+    marks: count("svg.map path.mark"), plots: count("svg.timeline polyline.plot"),
+    pulses: count("svg.timeline rect.plot.bool"), actions: count("svg.timeline rect.action"),
+    hover: hover(map)
+  });
+  document.body.appendChild(out);
+});
+</script>"""
+
+
+def _chromium() -> str:
+    found = (
+        os.environ.get("PYROBOTS_CHROMIUM")
+        or shutil.which("chromium")
+        or shutil.which("chromium-browser")
+    )
+    if not found:
+        if os.environ.get(REQUIRED) == "1":
+            pytest.fail(f"{BROWSER_HELP}; {REQUIRED}=1 (CI) requires it")
+        pytest.skip(BROWSER_HELP)
+    return found
+
+
+def _browse(page: Path, profile: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    command = [
+        _chromium(),
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--hide-scrollbars",
+        f"--user-data-dir={profile}",
+        "--window-size=1400,1000",
+        *args,
+        page.as_uri(),
+    ]
+    return subprocess.run(command, capture_output=True, text=True, timeout=120, check=True)
+
+
+def _png_pixels(data: bytes) -> tuple[int, int, list[tuple[int, int, int]]]:
+    """Decode an 8-bit RGB or RGBA, non-interlaced PNG (what chromium writes)."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, header = 8, b"", b""
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + length]
+        header = body if kind == b"IHDR" else header
+        idat += body if kind == b"IDAT" else b""
+        pos += 12 + length
+    width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", header)
+    assert (depth, colour, interlace) in {(8, 2, 0), (8, 6, 0)}
+    size = 3 if colour == 2 else 4
+    raw, stride = zlib.decompress(idat), width * size
+    previous, pixels = bytearray(stride), []
+    for y in range(height):
+        kind, line = (
+            raw[y * (stride + 1)],
+            bytearray(raw[y * (stride + 1) + 1 : (y + 1) * (stride + 1)]),
+        )
+        for i in range(stride):
+            left = line[i - size] if i >= size else 0
+            up, corner = previous[i], previous[i - size] if i >= size else 0
+            if kind == 1:
+                line[i] = (line[i] + left) & 0xFF
+            elif kind == 2:
+                line[i] = (line[i] + up) & 0xFF
+            elif kind == 3:
+                line[i] = (line[i] + (left + up) // 2) & 0xFF
+            elif kind == 4:
+                p = left + up - corner
+                pa, pb, pc = abs(p - left), abs(p - up), abs(p - corner)
+                best = left if pa <= pb and pa <= pc else up if pb <= pc else corner
+                line[i] = (line[i] + best) & 0xFF
+        pixels += [tuple(line[i : i + 3]) for i in range(0, stride, size)]
+        previous = line
+    return width, height, pixels  # type: ignore[return-value]
+
+
+def _near(
+    seen: Counter[tuple[int, int, int]], colour: tuple[int, int, int], within: int = 6
+) -> int:
+    """How many pixels are within ``within`` of ``colour`` on each channel."""
+    return sum(
+        count
+        for pixel, count in seen.items()
+        if all(abs(a - b) <= within for a, b in zip(pixel, colour, strict=True))
+    )
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_a_headless_browser_shows_the_actions(
+    tmp_path: Path, record_scenario: Scenario
+) -> None:
+    _chromium()
+    path = tmp_path / "run.jsonl"
+    await record_scenario(JsonlRecorder(path, state_keys=["bumper"]))
+    page = tmp_path / "timeline.html"
+    page.write_text(render_timeline_html(load(path)))
+
+    dom = _browse(page, tmp_path / "profile-dom", "--dump-dom").stdout
+    assert len(re.findall(r'<rect class="action ', dom)) == 9
+    assert len(re.findall(r'<rect class="hold"', dom)) == 6
+    assert len(re.findall(r'<svg class="(timeline|rates)"', dom)) == 2
+
+    shot = tmp_path / "timeline.png"
+    _browse(page, tmp_path / "profile-shot", f"--screenshot={shot}")
+    width, height, pixels = _png_pixels(shot.read_bytes())
+    assert (width, height) == (1400, 1000)
+    colours = {colour: pixels.count(colour) for colour in (GREEN, ORANGE, RED)}
+    # far more than the 12x12 legend swatches: the bars themselves are drawn
+    assert colours[GREEN] > 5000, colours
+    assert colours[ORANGE] > 1000, colours
+    assert colours[RED] > 300, colours
+
+
+async def _walk(path: Path) -> None:
+    robot = SimRobot(seed=1)
+    with JsonlRecorder(path).attach(robot):
+        async with robot:
+            await random_walk(robot, duration=60, seed=1)
+
+
+def _expected(recording: Recording) -> dict[str, int]:
+    found = analyse(recording)
+    numbers = [s for s in plotted(recording) if not all(isinstance(v, bool) for v in s.values)]
+    kinds = [m.kind for m in marks(recording, found)]
+    return {"bumps": kinds.count("bump"), "marks": len(kinds), "plots": len(numbers)}
+
+
+def test_the_map_path_and_plots_are_drawn_where_the_robot_went(tmp_path: Path) -> None:
+    _chromium()
+    path = tmp_path / "walk.jsonl"
+    run(_walk, path)  # lockstep virtual time
+    recording = load(path)
+    html = render_timeline_html(recording)
+    page = tmp_path / "walk.html"
+    page.write_text(html.replace("</body>", PROBE + "</body>"))
+
+    dom = _browse(page, tmp_path / "profile-dom", "--dump-dom").stdout
+    found = re.search(r'<pre id="probe">([^<]*)</pre>', dom)
+    assert found is not None, dom[-2000:]
+    probe = json.loads(found.group(1))
+    expected = _expected(recording)
+    assert expected["bumps"] >= 1  # this walk bumps into something
+    assert (probe["bumps"], probe["marks"], probe["plots"]) == (
+        expected["bumps"],
+        expected["marks"],
+        expected["plots"],
+    )
+    assert probe["pulses"] == expected["bumps"]  # the bumper plot: one pulse per bump
+    assert probe["shapes"] == len(recording.header.floor_plan) == 8
+    assert probe["dock"] == 1
+    assert 10 <= probe["trail"] <= 240
+    assert probe["actions"] == len(analyse(recording).spans)
+    # The drawn path covers the recorded poses, to within its pixel step.
+    poses = recording.poses
+    scale = float(re.search(r'data-scale="([\d.]+)"', html).group(1))  # type: ignore[union-attr]
+    slack = (STEP_PX + 0.5) / scale
+    assert probe["x"][0] == pytest.approx(min(poses.x), abs=slack)
+    assert probe["x"][1] == pytest.approx(max(poses.x), abs=slack)
+    assert probe["y"][0] == pytest.approx(min(poses.y), abs=slack)
+    assert probe["y"][1] == pytest.approx(max(poses.y), abs=slack)
+
+    # Hover links both ways: the mark's place on the map shows its time on the timeline,
+    # and its time on the timeline puts the map's "here" circle on the mark.
+    hover = probe["hover"]
+    assert hover["shown"]
+    assert hover["cursor"] == pytest.approx(hover["expected"], abs=2.0)  # pixels of the timeline
+    assert abs(hover["here"][0]) < 3
+    assert abs(hover["here"][1]) < 3
+
+    shot = tmp_path / "walk.png"
+    _browse(page, tmp_path / "profile-shot", f"--screenshot={shot}")
+    seen = Counter(_png_pixels(shot.read_bytes())[2])
+    assert _near(seen, DOCK) > 200  # the dock, from the model's colour
+    assert _near(seen, BUMP, within=20) > 20  # the bump marks
+    trail = {tuple(int(c[i : i + 2], 16) for i in (1, 3, 5)) for c in re.findall(
+        r'class="trail" points="[^"]*" style="stroke:(#[0-9a-f]{6})"', html
+    )}  # fmt: skip
+    assert sum(_near(seen, colour, within=2) for colour in trail) > 1000  # the path itself

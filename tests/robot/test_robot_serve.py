@@ -1,0 +1,185 @@
+"""``Robot(serve=PORT)``: a live view over Foxglove's WebSocket protocol, tested with a real client.
+
+The client speaks the protocol as Foxglove does (``foxglove.sdk.v1``): it
+reads the server's channels, subscribes, and decodes the binary message frames
+(opcode 1, subscription id, time, JSON payload).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import socket
+import struct
+import sys
+import threading
+from typing import Any
+
+import pytest
+import websockets
+
+from pyrobots_aio import PyRobotsError, Robot
+from pyrobots_aio.sim import SimRobot
+
+PROTOCOL = websockets.Subprotocol("foxglove.sdk.v1")
+
+
+class FoxgloveClient:
+    """A minimal Foxglove WebSocket client: channels by topic, and messages by topic."""
+
+    def __init__(self, ws: Any) -> None:
+        self.ws = ws
+        self.channels: dict[str, dict[str, Any]] = {}
+        self.received: dict[str, list[dict[str, Any]]] = {}
+        self._topics: dict[int, str] = {}
+
+    async def read_until(self, done: Any) -> None:
+        """Read frames until ``done(self)`` is true."""
+        while not done(self):
+            frame = await self.ws.recv()
+            if isinstance(frame, str):
+                body = json.loads(frame)
+                if body["op"] == "advertise":
+                    self.channels |= {c["topic"]: c for c in body["channels"]}
+            else:
+                opcode, subscription, _ = struct.unpack_from("<BIQ", frame)
+                assert opcode == 1  # a message data frame
+                topic = self._topics[subscription]
+                self.received.setdefault(topic, []).append(json.loads(frame[13:]))
+
+    async def subscribe(self, *topics: str) -> None:
+        subscriptions = []
+        for topic in topics:
+            ident = len(self._topics) + 1
+            self._topics[ident] = topic
+            subscriptions.append({"id": ident, "channelId": self.channels[topic]["id"]})
+        await self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+
+
+def _refused(port: int) -> bool:
+    with socket.socket() as probe:
+        return probe.connect_ex(("127.0.0.1", port)) != 0
+
+
+def _python_threads() -> set[threading.Thread]:
+    """The threads Python started (not the SDK's native ones that once called into Python)."""
+    return {t for t in threading.enumerate() if not isinstance(t, threading._DummyThread)}
+
+
+def _os_threads() -> int:
+    return len(os.listdir("/proc/self/task"))
+
+
+@pytest.mark.asyncio
+async def test_a_client_subscribes_and_receives_pose_and_action_messages() -> None:
+    threads = _python_threads()
+    robot = SimRobot(realtime=True, serve=0)
+    async with robot:
+        assert robot.live is not None
+        port = robot.live.port
+        assert port is not None
+        assert repr(robot.live) == f"<LiveView ws://127.0.0.1:{port}>"
+        async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=[PROTOCOL]) as ws:
+            client = FoxgloveClient(ws)
+            await asyncio.wait_for(
+                client.read_until(
+                    lambda c: {"/pyrobots/pose", "/pyrobots/actions"} <= set(c.channels)
+                ),
+                30,  # a hang guard, not a timing
+            )
+            pose, actions = client.channels["/pyrobots/pose"], client.channels["/pyrobots/actions"]
+            assert (pose["schemaName"], pose["encoding"]) == ("foxglove.PoseInFrame", "json")
+            assert json.loads(pose["schema"])["title"] == "foxglove.PoseInFrame"
+            assert actions["schemaName"] == "pyrobots_aio.ExecEvent"
+            assert client.channels["/tf"]["schemaName"] == "foxglove.FrameTransforms"
+            assert client.channels["/pyrobots/log"]["schemaName"] == "foxglove.Log"
+            await client.subscribe("/pyrobots/pose", "/pyrobots/actions")
+            await asyncio.sleep(0.1)  # let the subscription land before the action starts
+            walk = robot.undock()
+            await asyncio.wait_for(
+                client.read_until(
+                    lambda c: (
+                        len(c.received.get("/pyrobots/pose", ())) >= 5
+                        and len(c.received.get("/pyrobots/actions", ())) >= 2
+                    )
+                ),
+                30,
+            )
+            walk.cancel("test over")
+            await walk.wait_done()
+    poses = client.received["/pyrobots/pose"]
+    assert {p["frame_id"] for p in poses} == {"map"}
+    assert poses[-1]["pose"]["position"]["x"] > -1.728  # moving away from the dock
+    first = client.received["/pyrobots/actions"][0]
+    assert (first["kind"], first["name"]) == ("action.spawned", "undock")
+    # stopped with the robot: the port is closed, and no Python thread is left
+    assert _refused(port)
+    assert _python_threads() == threads
+
+
+@pytest.mark.asyncio
+async def test_each_robot_stops_its_server_and_leaves_no_thread() -> None:
+    counts, closed = [], []
+    for _ in range(3):
+        async with Robot(serve=0) as robot:
+            assert robot.live is not None
+            port = robot.live.port
+        assert port is not None
+        closed.append(_refused(port))  # at once: later, another socket may take the port
+        counts.append(_os_threads())
+    assert closed == [True, True, True]
+    # The SDK's runtime (native, idle, shut down at exit) is shared: no growth per robot.
+    assert counts[0] == counts[1] == counts[2]
+
+
+@pytest.mark.asyncio
+async def test_a_plain_robot_streams_its_state() -> None:
+    async with Robot(serve=0) as robot:
+        assert robot.live is not None
+        assert robot.live.port is not None
+        url = f"ws://127.0.0.1:{robot.live.port}"
+        async with websockets.connect(url, subprotocols=[PROTOCOL]) as ws:
+            client = FoxgloveClient(ws)
+            robot.state.speed = 0.0
+            await asyncio.wait_for(
+                client.read_until(lambda c: "/pyrobots/state/speed" in c.channels), 30
+            )
+            await client.subscribe("/pyrobots/state/speed")
+            await asyncio.sleep(0.1)
+            robot.state.speed = 0.5
+            await asyncio.wait_for(
+                client.read_until(lambda c: "/pyrobots/state/speed" in c.received), 30
+            )
+    (sample,) = client.received["/pyrobots/state/speed"]
+    assert (sample["key"], sample["value"]) == ("speed", 0.5)
+
+
+@pytest.mark.parametrize("port", [-1, 65536, "8765", 1.5, True])
+def test_a_bad_port_is_refused(port: object) -> None:
+    with pytest.raises(ValueError, match=r"serve must be a TCP port number from 0 to 65535"):
+        Robot(serve=port)  # type: ignore[arg-type]
+
+
+@pytest.mark.asyncio
+async def test_a_taken_port_is_a_clear_error() -> None:
+    async with Robot(serve=0) as first:
+        assert first.live is not None
+        taken = first.live.port
+        second = Robot(serve=taken)
+        with pytest.raises(
+            PyRobotsError, match=rf"cannot serve the live view on 127\.0\.0\.1:{taken}"
+        ):
+            async with second:
+                pass
+        assert not second.is_running
+
+
+def test_without_the_sdk_the_error_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "foxglove", None)  # as if foxglove-sdk were not installed
+    with pytest.raises(PyRobotsError) as info:
+        Robot(serve=8765)
+    assert str(info.value) == (
+        "Robot(serve=...) needs Foxglove's SDK, which is optional: install it with "
+        'pip install -e ".[live]" from a checkout (or pip install foxglove-sdk)'
+    )
