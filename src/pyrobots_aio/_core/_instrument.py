@@ -84,35 +84,36 @@ class Instruments:
         1
     """
 
-    __slots__ = ("_items",)
+    __slots__ = ("items",)
 
     def __init__(self) -> None:
-        self._items: tuple[Instrument, ...] = ()
+        self.items: tuple[Instrument, ...] = ()
+        """The instruments, in the order added (empty: hot paths skip building events)."""
 
     def add(self, instrument: Instrument) -> None:
         """Attach an instrument (an object with ``on_event(event)``)."""
         if not callable(getattr(instrument, "on_event", None)):
             msg = f"{instrument!r} is not an instrument: it needs an on_event(event) method"
             raise TypeError(msg)
-        self._items = (*self._items, instrument)
+        self.items = (*self.items, instrument)
 
     def remove(self, instrument: Instrument) -> None:
         """Detach an instrument; detaching one that is not attached does nothing."""
-        self._items = tuple(i for i in self._items if i is not instrument)
+        self.items = tuple(i for i in self.items if i is not instrument)
 
     def __bool__(self) -> bool:
-        return bool(self._items)
+        return bool(self.items)
 
     def __iter__(self) -> Iterator[Instrument]:
-        return iter(self._items)
+        return iter(self.items)
 
     def emit(self, event: ExecEvent) -> None:
         """Send one event to every instrument; a failing instrument is logged, not fatal."""
-        for instrument in self._items:
+        for instrument in self.items:
             try:
                 instrument.on_event(event)
             except Exception:
                 _log.exception("instrument %r failed on %s", instrument, event.kind)
 
     def __repr__(self) -> str:
-        return f"<Instruments {list(self._items)!r}>"
+        return f"<Instruments {list(self.items)!r}>"

@@ -54,7 +54,10 @@ class Action(Generic[R, P, T]):
         functools.update_wrapper(self, fn)
 
     def __call__(self, robot: R, /, *args: P.args, **kwargs: P.kwargs) -> ActionHandle[T]:
-        return executive_of(robot, self.name).spawn(self.name, self.fn, (robot, *args), kwargs)
+        executive: Executive | None = getattr(robot, "_executive", None)
+        if executive is None:
+            executive = executive_of(robot, self.name)  # raises, naming what was passed
+        return executive.spawn(self.name, self.fn, self.fn(robot, *args, **kwargs))
 
     @overload
     def __get__(self, instance: None, owner: type[Any]) -> Action[R, P, T]: ...

@@ -23,7 +23,7 @@ from .._core._loops import current_loop, wrong_loop
 from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
-from ._handle import ActionHandle, ActionState, Outcome, drive
+from ._handle import _DONE, ActionHandle, ActionState, Outcome, drive
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
@@ -53,7 +53,7 @@ class Executive:
         self.log_scope = log if log is not None else LogScope()
         self.log = self.log_scope.logger("pyrobots_aio.actions")
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._thread = ""
+        self.thread = ""
         self._running: dict[int, ActionHandle[Any]] = {}
         self._roots: dict[ActionHandle[Any], None] = {}
         self._next_id = 1
@@ -79,13 +79,13 @@ class Executive:
     def open(self, loop: asyncio.AbstractEventLoop) -> None:
         """Start accepting actions on ``loop`` (the running loop, in this thread)."""
         self._loop = loop
-        self._thread = threading.current_thread().name
+        self.thread = threading.current_thread().name
 
     def check_loop(self, what: str) -> asyncio.AbstractEventLoop:
         """The robot's loop; `EventLoopError` if the caller is on another thread or loop."""
         loop = self.loop
         if current_loop() is not loop:
-            raise wrong_loop(what, loop, self._thread)
+            raise wrong_loop(what, loop, self.thread)
         return loop
 
     async def close(self, reason: str) -> None:
@@ -123,34 +123,28 @@ class Executive:
         self,
         name: str,
         fn: Callable[..., Coroutine[Any, Any, T]],
-        args: tuple[Any, ...],
-        kwargs: dict[str, Any],
+        coro: Coroutine[Any, Any, T],
     ) -> ActionHandle[T]:
-        """Start ``fn(*args, **kwargs)`` as an action now; return its handle without blocking."""
+        """Start ``coro`` (made by the action function ``fn``) as an action now; return its handle.
+
+        Never blocks. If the action cannot start, ``coro`` is closed and the
+        error says why.
+        """
         loop = self._loop
-        if loop is None:
-            msg = (
-                f"cannot start action {name!r}: {self.owner!r} is not running; "
-                "start it inside 'async with robot:'"
-            )
-            raise RobotNotRunningError(msg)
-        if current_loop() is not loop:
-            raise wrong_loop(f"start action {name!r}", loop, self._thread)
-        if self.max_actions is not None and len(self._running) >= self.max_actions:
-            raise TooManyActions(name, self.max_actions, list(self._running.values()))
         parent = current_action.get()
-        if parent is not None and (parent._executive is not self or parent.done()):
+        if parent is not None and (parent._executive is not self or parent._phase == _DONE):
             parent = None
-        if parent is None and self._closing:
-            msg = (
-                f"cannot start action {name!r}: {self.owner!r} is shutting down; start it "
-                "before leaving 'async with robot:', or from an action's cleanup"
-            )
-            raise RobotNotRunningError(msg)
+        if (
+            loop is None
+            or current_loop() is not loop
+            or (parent is None and self._closing)
+            or (self.max_actions is not None and len(self._running) >= self.max_actions)
+        ):
+            coro.close()
+            raise self._refusal(name, loop)
         ident = self._next_id
         self._next_id = ident + 1
-        handle: ActionHandle[T] = ActionHandle(self, ident, name, parent, loop.time())
-        coro = fn(*args, **kwargs)
+        handle: ActionHandle[T] = ActionHandle(self, loop, ident, name, parent)
         handle._fn = fn
         handle._task = loop.create_task(drive(handle, coro), name=f"{name}#{ident}")
         self._running[ident] = handle
@@ -158,24 +152,36 @@ class Executive:
             self._roots[handle] = None
         else:
             parent._children[handle] = None
-        if self.instruments:
+        if self.instruments.items:
             self._emit(EventKind.ACTION_SPAWNED, handle, parent=parent.id if parent else None)
         return handle
 
+    def _refusal(self, name: str, loop: asyncio.AbstractEventLoop | None) -> Exception:
+        """Why action ``name`` cannot start now (`spawn` found that it cannot)."""
+        if loop is None:
+            msg = (
+                f"cannot start action {name!r}: {self.owner!r} is not running; "
+                "start it inside 'async with robot:'"
+            )
+            return RobotNotRunningError(msg)
+        if current_loop() is not loop:
+            return wrong_loop(f"start action {name!r}", loop, self.thread)
+        if self.max_actions is not None and len(self._running) >= self.max_actions:
+            return TooManyActions(name, self.max_actions, list(self._running.values()))
+        msg = (
+            f"cannot start action {name!r}: {self.owner!r} is shutting down; start it "
+            "before leaving 'async with robot:', or from an action's cleanup"
+        )
+        return RobotNotRunningError(msg)
+
     def started(self, handle: ActionHandle[Any]) -> None:
         """Called by the action's task when its body starts."""
-        if self.instruments:
+        if self.instruments.items:
             self._emit(EventKind.ACTION_STARTED, handle)
 
     def finished(self, handle: ActionHandle[Any]) -> None:
-        """Called when an action is done: drop it from the registry and its scope."""
-        self._running.pop(handle.id, None)
-        parent = handle.parent
-        if parent is None:
-            self._roots.pop(handle, None)
-        else:
-            parent._children.pop(handle, None)
-        if self.instruments:
+        """Record that an action is done (the handle has left the registry and its scope)."""
+        if self.instruments.items:
             error = handle._error
             self._emit(
                 EventKind.ACTION_FINISHED,
@@ -206,7 +212,7 @@ class Executive:
             node._cancel_by = by
             node._interrupt()
             self._watch_later(node, _ESCALATE)
-            if self.instruments:
+            if self.instruments.items:
                 self._emit(
                     EventKind.CANCEL_REQUESTED,
                     node,
@@ -304,7 +310,7 @@ class Executive:
             )
             handle._interrupt()
             self._watch_later(handle, _ABANDON)
-            if self.instruments:
+            if self.instruments.items:
                 self._emit(EventKind.CANCEL_ESCALATED, handle, location=where)
             return
         self.log.error(
@@ -315,7 +321,7 @@ class Executive:
             2 * self.cancel_grace,
             where,
         )
-        if self.instruments:
+        if self.instruments.items:
             self._emit(EventKind.ACTION_ABANDONED, handle, location=where)
         handle._abandon(2 * self.cancel_grace)
 

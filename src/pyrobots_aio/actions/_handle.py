@@ -18,6 +18,7 @@ import traceback
 import weakref
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
+from .._core._loops import current_loop, wrong_loop
 from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
 from ._context import current_action
 from ._where import definition, location
@@ -97,6 +98,7 @@ class ActionHandle(Generic[T]):
         "_finalizers",
         "_fn",
         "_internal",
+        "_loop",
         "_outcome",
         "_phase",
         "_task",
@@ -116,16 +118,17 @@ class ActionHandle(Generic[T]):
     def __init__(
         self,
         executive: Executive,
+        loop: asyncio.AbstractEventLoop,
         ident: int,
         name: str,
         parent: ActionHandle[Any] | None,
-        spawned_at: float,
     ) -> None:
         self._executive = executive
+        self._loop = loop
         self.id = ident
         self.name = name
         self.parent = parent
-        self.spawned_at = spawned_at
+        self.spawned_at = loop.time()
         self.started_at: float | None = None
         self.finished_at: float | None = None
         self.held: tuple[str, ...] = ()
@@ -150,15 +153,30 @@ class ActionHandle(Generic[T]):
     # -- awaiting ---------------------------------------------------------
 
     def __await__(self) -> Generator[Any, None, T]:
-        return self._result_when_done().__await__()
-
-    async def _result_when_done(self) -> T:
-        try:
-            await self._wait_done("await")
-        except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
-            self.cancel("the task awaiting it was cancelled")
-            raise
-        return self.result()
+        # A generator, with its helpers inlined: every awaited action pays for this.
+        if self._phase != _DONE:
+            loop = self._loop
+            if current_loop() is not loop:
+                what = f"await action {self.name}#{self.id}"
+                raise wrong_loop(what, loop, self._executive.thread)
+            fut: asyncio.Future[None] = asyncio.Future(loop=loop)
+            if self._waiters is None:
+                self._waiters = [fut]
+            else:
+                self._waiters.append(fut)
+            try:
+                yield from fut
+            except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
+                self.cancel("the task awaiting it was cancelled")
+                raise
+            finally:
+                if not fut.done() and self._waiters is not None:
+                    self._waiters.remove(fut)
+        if self._unretrieved is not None:
+            self._retrieved()
+        if self._error is not None:
+            raise self._error
+        return self._value  # type: ignore[return-value]
 
     async def wait(self) -> T:
         """Wait for the action and return its result (pyRobots' spelling of ``await handle``).
@@ -180,22 +198,30 @@ class ActionHandle(Generic[T]):
         ``asyncio.timeout`` expired) leaves the action running. ``await handle``
         owns it instead.
         """
-        await self._wait_done("wait for")
-        return self._outcome
-
-    async def _wait_done(self, verb: str) -> None:
         if self._phase != _DONE:
-            loop = self._executive.check_loop(f"{verb} action {self.name}#{self.id}")
-            fut = loop.create_future()
-            if self._waiters is None:
-                self._waiters = []
-            self._waiters.append(fut)
+            fut = self._waiter("wait for")
             try:
                 await fut
             finally:
-                if not fut.done() and self._waiters is not None:
-                    self._waiters.remove(fut)
+                self._forget_waiter(fut)
         self._retrieved()
+        return self._outcome
+
+    def _waiter(self, verb: str) -> asyncio.Future[None]:
+        """A future the action's end completes; the caller must be on the robot's loop."""
+        loop = self._loop
+        if current_loop() is not loop:
+            raise wrong_loop(f"{verb} action {self.name}#{self.id}", loop, self._executive.thread)
+        fut = loop.create_future()
+        if self._waiters is None:
+            self._waiters = [fut]
+        else:
+            self._waiters.append(fut)
+        return fut
+
+    def _forget_waiter(self, fut: asyncio.Future[None]) -> None:
+        if not fut.done() and self._waiters is not None:
+            self._waiters.remove(fut)
 
     # -- inspecting -------------------------------------------------------
 
@@ -402,11 +428,11 @@ class ActionHandle(Generic[T]):
         """
         if self._phase == _DONE:
             return
-        if release:
+        if release and self._finalizers is not None:
             self._run_finalizers()
         self._phase = _DONE
         self._coro = None
-        self.finished_at = self._executive.loop.time()
+        self.finished_at = self._loop.time()
         if self._callbacks is not None:  # scheduled first: they run before awaiters resume
             callbacks, self._callbacks = self._callbacks, None
             for callback in callbacks:
@@ -421,7 +447,14 @@ class ActionHandle(Generic[T]):
         self._task = None  # the task's context refers back to this handle
         if self._outcome is Outcome.FAILED and not waiting:
             self._report_unless_retrieved()
-        self._executive.finished(self)
+        executive = self._executive  # leave its registry and scope (the executive's, inlined)
+        executive._running.pop(self.id, None)
+        if self.parent is None:
+            executive._roots.pop(self, None)
+        else:
+            self.parent._children.pop(self, None)
+        if executive.instruments.items:
+            executive.finished(self)
         if self._internal is not None:
             internal, self._internal = self._internal, None
             for callback in internal:
@@ -469,59 +502,65 @@ class ActionHandle(Generic[T]):
         return f"<ActionHandle {self.name}#{self.id} {self.state.value}{parent}>"
 
 
-async def drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
+async def drive(  # noqa: PLR0912 (one flat coroutine: every action pays for each frame)
+    handle: ActionHandle[T], coro: Coroutine[Any, Any, T]
+) -> None:
     """Run an action's body in its own task, then wind it up (the task's coroutine)."""
-    try:
-        await _drive(handle, coro)
-    finally:  # an abandoned action releases its resources only now that its task ends
-        handle._run_finalizers()
-
-
-async def _drive(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
     current_action.set(handle)
-    executive = handle._executive
-    if handle._cancel_requested:  # cancelled before it ever ran: the body never starts
-        coro.close()
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
-    else:
-        handle._coro = coro
-        handle._phase = _RUNNING
-        handle.started_at = executive.loop.time()
-        executive.started(handle)
-        await _run_body(handle, coro)
-        if handle._phase == _DONE:  # abandoned by the watchdog: done and reported already
-            return
-    handle._phase = _FINISHING
     try:
-        while handle._children:
+        never_ran = handle._cancel_requested  # a local: the attribute changes while it runs
+        if never_ran:  # cancelled before it ever ran: the body never starts
+            coro.close()
+            handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+        else:
+            handle._coro = coro
+            handle._phase = _RUNNING
+            handle.started_at = handle._loop.time()
+            executive = handle._executive
+            if executive.instruments.items:
+                executive.started(handle)
             try:
-                await executive.reap_children(handle)
-            except asyncio.CancelledError:
-                # Meant for the body, which ended before it arrived (it returned without
-                # awaiting again): the children still get waited for.
-                continue
-    finally:
+                value = await coro
+            except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
+                handle._settle(Outcome.FAILED, error=exc)
+                handle._complete()
+                raise
+            except BaseException as exc:
+                if handle._phase == _DONE:  # abandoned: how its body ends changes nothing
+                    return
+                _settle_error(handle, exc)
+            else:
+                if handle._phase == _DONE:
+                    return
+                if handle._cancel_requested:  # cancellation swallowed: still CANCELLED
+                    handle._settle(Outcome.CANCELLED, value, handle._interrupted())
+                else:
+                    handle._outcome, handle._value = Outcome.SUCCEEDED, value
+        handle._phase = _FINISHING
+        if handle._children:
+            await _reap(handle)
         if handle._cancel_requested and handle._outcome is Outcome.SUCCEEDED:
             # cancelled while its children wound up: CANCELLED (a failure is never masked)
             handle._settle(Outcome.CANCELLED, error=handle._interrupted())
         handle._complete()
+    finally:  # an abandoned action releases its resources only once its task ends
+        if handle._finalizers is not None:
+            handle._run_finalizers()
 
 
-async def _run_body(handle: ActionHandle[T], coro: Coroutine[Any, Any, T]) -> None:
+async def _reap(handle: ActionHandle[Any]) -> None:
+    """Wait for the children still running when the body ended (the executive's rules)."""
     try:
-        value = await coro
-    except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
-        handle._settle(Outcome.FAILED, error=exc)
+        while handle._children:
+            try:
+                await handle._executive.reap_children(handle)
+            except asyncio.CancelledError:
+                # Meant for the body, which ended before it arrived (it returned without
+                # awaiting again): the children still get waited for.
+                continue
+    except BaseException:
         handle._complete()
         raise
-    except BaseException as exc:
-        if handle._phase != _DONE:  # abandoned: how its body ends changes nothing
-            _settle_error(handle, exc)
-    else:
-        if handle._cancel_requested:  # cancellation swallowed: still CANCELLED
-            handle._settle(Outcome.CANCELLED, value, handle._interrupted())
-        else:
-            handle._settle(Outcome.SUCCEEDED, value)
 
 
 def _settle_error(handle: ActionHandle[Any], exc: BaseException) -> None:
