@@ -180,7 +180,13 @@ class Executive:
             self._emit(EventKind.ACTION_STARTED, handle)
 
     def finished(self, handle: ActionHandle[Any]) -> None:
-        """Record that an action is done (the handle has left the registry and its scope)."""
+        """Called when an action is done: drop it from the registry and its scope."""
+        self._running.pop(handle.id, None)
+        parent = handle.parent
+        if parent is None:
+            self._roots.pop(handle, None)
+        else:
+            parent._children.pop(handle, None)
         if self.instruments.items:
             error = handle._error
             self._emit(

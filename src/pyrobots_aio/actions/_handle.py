@@ -447,14 +447,7 @@ class ActionHandle(Generic[T]):
         self._task = None  # the task's context refers back to this handle
         if self._outcome is Outcome.FAILED and not waiting:
             self._report_unless_retrieved()
-        executive = self._executive  # leave its registry and scope (the executive's, inlined)
-        executive._running.pop(self.id, None)
-        if self.parent is None:
-            executive._roots.pop(self, None)
-        else:
-            self.parent._children.pop(self, None)
-        if executive.instruments.items:
-            executive.finished(self)
+        self._executive.finished(self)
         if self._internal is not None:
             internal, self._internal = self._internal, None
             for callback in internal:
