@@ -8,7 +8,10 @@ cancelled (its cleanup stops the wheels), the reflex backs off and turns away,
 and the walk — which sees `ActionInterrupted`, an ordinary exception — simply
 goes on with its next move once the reflex has released the wheels.
 
-Run it with ``pyrobots-aio demo random-walk`` or ``python examples/random_walk.py``.
+It is written against `pyrobots_aio.motion.DriveBase` alone, so it runs
+unchanged on the simulated robot, a ROS 2 robot and the in-memory
+`pyrobots_aio.testing.FakeBase`; importing it needs no MuJoCo. Run it with
+``pyrobots-aio demo random-walk`` or ``python examples/random_walk.py``.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from dataclasses import dataclass
 
 from .._exceptions import ActionInterrupted
 from ..actions import action, lock
-from ._robot import WHEELS, SimRobot
+from ..motion import WHEELS, DriveBase
 
 _log = logging.getLogger("pyrobots_aio.sim.random_walk")
 
@@ -54,7 +57,7 @@ class WalkReport:
 
 @action
 @lock(WHEELS, priority=REFLEX_PRIORITY, preempt=True)
-async def bumper_reflex(robot: SimRobot) -> None:
+async def bumper_reflex(robot: DriveBase) -> None:
     """Back off, then turn away from the side that was hit (both sides: turn round)."""
     left, right = robot.state.bumper_left, robot.state.bumper_right
     turn = -0.9 if left and not right else 0.9 if right and not left else 0.75 * math.pi
@@ -64,7 +67,7 @@ async def bumper_reflex(robot: SimRobot) -> None:
 
 
 @action
-async def move(robot: SimRobot, angle: float, distance: float) -> bool:
+async def move(robot: DriveBase, angle: float, distance: float) -> bool:
     """One random-walk move: turn by ``angle``, then drive ``distance``.
 
     Returns False if the bumper reflex preempted it (an outcome, not a failure).
@@ -79,12 +82,12 @@ async def move(robot: SimRobot, angle: float, distance: float) -> bool:
 
 
 async def random_walk(
-    robot: SimRobot, *, moves: int = 10, duration: float | None = None, seed: int = 0
+    robot: DriveBase, *, moves: int = 10, duration: float | None = None, seed: int = 0
 ) -> WalkReport:
     """Undock, drive out, make random moves, dock; a bumper reflex handles collisions.
 
     Args:
-        robot: A running simulated robot (it starts docked).
+        robot: A running robot base (it starts docked, as a Create 3 does).
         moves: Random turn-and-drive moves to make.
         duration: If given, keep making moves until this many simulated seconds
             have passed since the start (at least ``moves`` moves are made first).
@@ -110,7 +113,7 @@ async def random_walk(
     return WalkReport(done, reflex.firings, interrupted, docked, robot.time() - start)
 
 
-async def _dock(robot: SimRobot) -> bool:
+async def _dock(robot: DriveBase) -> bool:
     """Dock; after a bump, go round the obstacle (bug-style) instead of retrying straight."""
     for attempt in range(1, DOCK_ATTEMPTS + 1):
         try:
@@ -123,7 +126,7 @@ async def _dock(robot: SimRobot) -> bool:
     return bool(robot.state.docked)
 
 
-async def _detour(robot: SimRobot) -> None:
+async def _detour(robot: DriveBase) -> None:
     """Drive on `DETOUR` metres once the reflex has turned away (it may bump again)."""
     try:
         await robot.drive_distance(DETOUR)  # queued behind the reflex, which holds the wheels
@@ -131,7 +134,7 @@ async def _detour(robot: SimRobot) -> None:
         _log.info("detour interrupted by a bump")
 
 
-async def _reflex_done(robot: SimRobot) -> None:
+async def _reflex_done(robot: DriveBase) -> None:
     """Wait until a bumper reflex holding the wheels is done."""
     holder = robot.resources.owner(WHEELS)
     if holder is not None and holder.name == bumper_reflex.name:
