@@ -32,6 +32,9 @@ REFLEX_PRIORITY = 10
 BACK_OFF = 0.15
 """Metres the reflex backs off after a bump."""
 DOCK_ATTEMPTS = 5
+"""Docking attempts before the walk gives up (each interrupted one detours first)."""
+LEAVE_DOCK = 0.5
+"""Metres driven straight out after undocking, before the random moves."""
 DETOUR = 0.4
 """Metres driven on, the way the reflex left the robot facing, before docking again."""
 
@@ -98,8 +101,7 @@ async def random_walk(
     reflex = robot.whenever("bumper", becomes=True).do(bumper_reflex)
     done = interrupted = 0
     try:
-        await robot.undock()
-        await robot.drive_distance(0.5)
+        await _leave_dock(robot)
         while done < moves or (duration is not None and robot.time() - start < duration):
             angle, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.3, 1.0)
             if not await move(robot, angle, distance):
@@ -107,21 +109,40 @@ async def random_walk(
             done += 1
         docked = await _dock(robot)
         reflex.stop_monitoring()
-        await _reflex_done(robot)  # a bump at the very end: let the reflex back off
+        await _reflexes_done(robot)  # a bump at the very end: let the reflex back off
     finally:
         await reflex.close()
+    docked = docked and bool(robot.state.docked)
     return WalkReport(done, reflex.firings, interrupted, docked, robot.time() - start)
 
 
+async def _leave_dock(robot: DriveBase) -> None:
+    """Undock and drive out `LEAVE_DOCK`; a bump on the way is the reflex's, and the walk goes on.
+
+    (The Create 3 script's walk died here: a bump during the undock or the
+    first drive ended it, and the reflex with it.)
+    """
+    try:
+        await robot.undock()
+        await robot.drive_distance(LEAVE_DOCK)
+    except ActionInterrupted as stop:
+        _log.info("leaving the dock interrupted: %s", stop.reason)
+
+
 async def _dock(robot: DriveBase) -> bool:
-    """Dock; after a bump, go round the obstacle (bug-style) instead of retrying straight."""
+    """Dock; after a bump, go round the obstacle (bug-style) instead of retrying straight.
+
+    A bump just as the robot docked makes the reflex back it off the dock: it docks again.
+    """
     for attempt in range(1, DOCK_ATTEMPTS + 1):
         try:
             await robot.dock()
         except ActionInterrupted:
             _log.info("docking attempt %d interrupted by a bump; detouring", attempt)
             await _detour(robot)
-        else:
+            continue
+        await _reflexes_done(robot)
+        if robot.state.docked:
             return True
     return bool(robot.state.docked)
 
@@ -134,8 +155,8 @@ async def _detour(robot: DriveBase) -> None:
         _log.info("detour interrupted by a bump")
 
 
-async def _reflex_done(robot: DriveBase) -> None:
-    """Wait until a bumper reflex holding the wheels is done."""
-    holder = robot.resources.owner(WHEELS)
-    if holder is not None and holder.name == bumper_reflex.name:
-        await holder.wait_done()
+async def _reflexes_done(robot: DriveBase) -> None:
+    """Wait until every bumper reflex started so far is done (at once if there is none)."""
+    for handle in robot.handles():
+        if handle.name == bumper_reflex.name:
+            await handle.wait_done()
