@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Literal
 import pytest
 
 from pyrobots_aio import EventKind
-from pyrobots_aio.sim.random_walk import random_walk
+from pyrobots_aio.sim.random_walk import bumper_reflex, random_walk
 from pyrobots_aio.testing import EventLog, inject_bump
 
 if TYPE_CHECKING:
@@ -62,3 +62,14 @@ async def test_without_a_bump_the_walk_has_none_of_its_own(base: Base) -> None:
     counts = {name: started.count(name) for name in ("undock", "drive_distance", "rotate_angle")}
     assert counts == {"undock": 1, "drive_distance": 5, "rotate_angle": 3}
     assert (started.count("dock"), started.count("navigate_to")) == (1, 1)
+
+
+async def test_a_bump_on_the_dock_turns_away_without_backing_into_the_dock(base: Base) -> None:
+    log = EventLog()
+    async with base.make(instruments=[log]) as robot:
+        robot.state.update(bumper=True, bumper_left=True, bumper_right=False)
+        start = robot.time()
+        await bumper_reflex(robot)
+        assert robot.time() - start < 2.0  # backing into the dock would stall the wheels
+        assert robot.odom_pose()[2] == pytest.approx(-0.9, abs=0.01)
+    assert log.names_started() == ["bumper_reflex", "rotate_angle"]

@@ -15,6 +15,8 @@ from ._base import UNDOCK_DISTANCE as UNDOCK_DISTANCE
 from ._base import WHEELS as WHEELS
 from ._base import DriveBase as DriveBase
 from ._base import Pose2D as Pose2D
+from ._base import World as World
+from ._base import WorldBase as WorldBase
 from ._control import Controllers as Controllers
 from ._math import wrap_angle as wrap_angle
 
@@ -27,5 +29,7 @@ __all__ = [
     "Controllers",
     "DriveBase",
     "Pose2D",
+    "World",
+    "WorldBase",
     "wrap_angle",
 ]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import abc
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from .._exceptions import MotionError
 from ..actions import action, lock
@@ -253,3 +253,38 @@ class DriveBase(Robot, abc.ABC):
                 await self.control(step)
         finally:
             self.stop()
+
+
+class World(Protocol):
+    """What `WorldBase` needs of the world it owns (`SimWorld`, `FakeWorld`)."""
+
+    def set_command(self, v: float, w: float) -> None:
+        """Drive at ``v`` (m/s) and ``w`` (rad/s) until the next command."""
+
+    def odom_pose(self) -> Pose2D:
+        """The pose dead-reckoned from the wheels, in the ``odom`` frame."""
+
+    def base_pose(self) -> Pose2D:
+        """The true pose, in the ``map`` frame."""
+
+
+class WorldBase(DriveBase):
+    """A `DriveBase` over a simulated world it owns, ``robot.world`` (a `World`).
+
+    The velocity command and odometry are the world's, and the map pose is
+    its true pose (a simulated robot is perfectly localised). A subclass sets
+    ``self.world`` and still provides `control_period` and `control`.
+    """
+
+    world: World
+
+    def _set_velocity(self, v: float, w: float) -> None:
+        self.world.set_command(v, w)
+
+    def odom_pose(self) -> Pose2D:
+        """The pose dead-reckoned by the world, in the ``odom`` frame."""
+        return self.world.odom_pose()
+
+    def map_pose(self) -> Pose2D:
+        """The world's true pose of the robot, in the ``map`` frame."""
+        return self.world.base_pose()

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..motion import ANGLE_TOLERANCE, DISTANCE_TOLERANCE, DOCK_APPROACH, WHEELS, DriveBase
+from ..motion import ANGLE_TOLERANCE, DISTANCE_TOLERANCE, DOCK_APPROACH, WHEELS, WorldBase
 from ._backend import SimBackend
 from ._frames import WorldFrames
 from ._world import SimWorld
@@ -19,12 +19,11 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from pathlib import Path
 
-    from ..motion import Pose2D
 
 __all__ = ["ANGLE_TOLERANCE", "DISTANCE_TOLERANCE", "DOCK_APPROACH", "WHEELS", "SimRobot"]
 
 
-class SimRobot(DriveBase):
+class SimRobot(WorldBase):
     """The MuJoCo simulation of a Create-3-sized robot in its arena; it starts docked.
 
     Time: the event loop's clock is the simulation's. When the robot starts
@@ -72,25 +71,14 @@ class SimRobot(DriveBase):
         physics_dt: float = 0.002,
         **options: Any,
     ) -> None:
-        self.world = SimWorld(model, seed=seed, physics_dt=physics_dt)
+        self.world: SimWorld = SimWorld(model, seed=seed, physics_dt=physics_dt)
         self.sim = SimBackend(self.world, control_rate=control_rate, realtime=realtime)
         super().__init__(backend=self.sim, **options)
         self.seed = seed
         self.realtime = realtime
         self.poses.add_frame_provider(WorldFrames(self.world))
 
-    # -- the DriveBase seam -----------------------------------------------
-
-    def _set_velocity(self, v: float, w: float) -> None:
-        self.world.set_command(v, w)
-
-    def odom_pose(self) -> Pose2D:
-        """The pose dead-reckoned from the wheel encoders (`SimWorld.odom_pose`)."""
-        return self.world.odom_pose()
-
-    def map_pose(self) -> Pose2D:
-        """The true pose in the map frame (`SimWorld.base_pose`)."""
-        return self.world.base_pose()
+    # -- the DriveBase seam (velocity, odometry and map pose: the world's) --
 
     @property
     def control_period(self) -> float:

@@ -61,11 +61,17 @@ class WalkReport:
 @action
 @lock(WHEELS, priority=REFLEX_PRIORITY, preempt=True)
 async def bumper_reflex(robot: DriveBase) -> None:
-    """Back off, then turn away from the side that was hit (both sides: turn round)."""
+    """Back off, then turn away from the side that was hit (both sides: turn round).
+
+    On the dock it only turns: the dock is behind (backing into it stalls the wheels).
+    """
     left, right = robot.state.bumper_left, robot.state.bumper_right
     turn = -0.9 if left and not right else 0.9 if right and not left else 0.75 * math.pi
-    _log.info("bump (left=%s right=%s): backing off and turning %.2f rad", left, right, turn)
-    await robot.drive_distance(-BACK_OFF)
+    if robot.state.docked:
+        _log.info("bump on the dock (left=%s right=%s): turning %.2f rad", left, right, turn)
+    else:
+        _log.info("bump (left=%s right=%s): backing off and turning %.2f rad", left, right, turn)
+        await robot.drive_distance(-BACK_OFF)
     await robot.rotate_angle(turn)
 
 

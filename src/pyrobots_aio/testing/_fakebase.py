@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import UnknownFrameError
-from ..motion import Controllers, DriveBase
+from ..motion import Controllers, WorldBase
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Collection, Iterable
@@ -251,7 +251,7 @@ class FakeFrames:
         return self.FRAMES
 
 
-class FakeBase(DriveBase):
+class FakeBase(WorldBase):
     """A `DriveBase` in memory: the motion actions and the random walk, with no simulator.
 
     The robot (round, 0.171 m radius) starts on its dock in a 4 m x 4 m walled
@@ -302,7 +302,7 @@ class FakeBase(DriveBase):
             )
             raise ValueError(msg)
         super().__init__(**options)
-        self.world = FakeWorld(room=room, dock=dock, obstacles=obstacles, start=start)
+        self.world: FakeWorld = FakeWorld(room=room, dock=dock, obstacles=obstacles, start=start)
         self.ticks = 0
         self._period = 1.0 / control_rate
         self._controllers = Controllers()
@@ -310,18 +310,7 @@ class FakeBase(DriveBase):
         self._start_time = 0.0
         self.poses.add_frame_provider(FakeFrames(self.world))
 
-    # -- the DriveBase seam -----------------------------------------------
-
-    def _set_velocity(self, v: float, w: float) -> None:
-        self.world.set_command(v, w)
-
-    def odom_pose(self) -> Pose2D:
-        """The pose dead-reckoned from the commanded speeds (`FakeWorld.odom_pose`)."""
-        return self.world.odom_pose()
-
-    def map_pose(self) -> Pose2D:
-        """The true pose in the map frame (`FakeWorld.base_pose`)."""
-        return self.world.base_pose()
+    # -- the DriveBase seam (velocity, odometry and map pose: the world's) --
 
     @property
     def control_period(self) -> float:
