@@ -1,4 +1,4 @@
-"""examples/kindergarten.py: a bump while the robot undocks, and the progress it shows."""
+"""The motion examples: the random walk on either base, kindergarten's wander and progress."""
 
 from __future__ import annotations
 
@@ -37,3 +37,10 @@ async def test_the_session_reports_its_progress_every_minute() -> None:
     assert sum(actions for _, actions, _ in shown) == session.actions_per_minute * 3
     assert max(actions for _, actions, _ in shown) == session.peak_actions_per_minute
     assert sum(events for _, _, events in shown) == session.events_per_minute * 3
+
+
+@pytest.mark.parametrize("fake", [False, True])
+async def test_the_random_walk_example_runs_on_the_simulator_and_in_memory(fake: bool) -> None:
+    report = await load_example("random_walk").main(seed=2, fake=fake)
+    assert (report.moves, report.docked) == (10, True)
+    assert report.bumps >= 1
