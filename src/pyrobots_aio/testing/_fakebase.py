@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -45,25 +44,28 @@ IR_SENSORS = {
 CLIFF_SENSORS = ("cliff_front_left", "cliff_front_right", "cliff_side_left", "cliff_side_right")
 """The cliff sensors; the fake floor has no cliff, so they read False."""
 _IR_RADIUS = 0.165
+_IR_BEARINGS = [(key, math.radians(degrees)) for key, degrees in IR_SENSORS.items()]
 _CONTACT = 1e-6  # metres: closer than this to a box counts as touching it
 _BUMPER_SIDE = 0.25  # radians: a hit this close to straight ahead presses both sides
 _DOCK_PAD = (0.012, 0.04)  # half-extents of the pad the charging contacts must lie on
 _DOCK_BLOCK = (0.05, 0.15)  # half-extents of the dock, behind its face
 
 
-@dataclass(frozen=True, slots=True)
 class Box:
     """A rectangular obstacle: centre ``(x, y)``, heading ``yaw``, half-extents ``hx``, ``hy``."""
 
-    x: float
-    y: float
-    yaw: float
-    hx: float
-    hy: float
+    __slots__ = ("_c", "_s", "hx", "hy", "x", "y", "yaw")
+
+    def __init__(self, x: float, y: float, yaw: float, hx: float, hy: float) -> None:
+        self.x, self.y, self.yaw, self.hx, self.hy = x, y, yaw, hx, hy
+        self._c, self._s = math.cos(yaw), math.sin(yaw)
+
+    def __repr__(self) -> str:
+        return f"Box(x={self.x}, y={self.y}, yaw={self.yaw}, hx={self.hx}, hy={self.hy})"
 
     def local(self, px: float, py: float) -> tuple[float, float]:
         """The point ``(px, py)`` of the map in the box's own frame."""
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        c, s = self._c, self._s
         dx, dy = px - self.x, py - self.y
         return c * dx + s * dy, -s * dx + c * dy
 
@@ -71,7 +73,7 @@ class Box:
         """The point of the box nearest to ``(px, py)``, in the map."""
         lx, ly = self.local(px, py)
         cx, cy = min(max(lx, -self.hx), self.hx), min(max(ly, -self.hy), self.hy)
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        c, s = self._c, self._s
         return self.x + c * cx - s * cy, self.y + s * cx + c * cy
 
     def ray(self, px: float, py: float, angle: float) -> float:
@@ -186,18 +188,22 @@ class FakeWorld:
         """Every reading, keyed as in ``robot.state`` (the keys of `DriveBase`)."""
         x, y, yaw = self._pose
         left = right = False
+        seen = []  # the boxes an IR ray may reach
         for box in self.boxes:
             nx, ny = box.nearest(x, y)
-            if math.hypot(x - nx, y - ny) <= RADIUS + _CONTACT:
+            gap = math.hypot(x - nx, y - ny)
+            if gap <= RADIUS + _CONTACT:
                 bearing = math.remainder(math.atan2(ny - y, nx - x) - yaw, math.tau)
                 left |= -_BUMPER_SIDE < bearing <= math.pi / 2
                 right |= -math.pi / 2 <= bearing < _BUMPER_SIDE
+            if gap < _IR_RADIUS + IR_RANGE:
+                seen.append(box)
         state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
         state["bumper_right"] = right
-        for key, bearing in IR_SENSORS.items():
-            angle = yaw + math.radians(bearing)
+        for key, bearing in _IR_BEARINGS:
+            angle = yaw + bearing
             ox, oy = x + _IR_RADIUS * math.cos(angle), y + _IR_RADIUS * math.sin(angle)
-            state[key] = min([IR_RANGE, *(box.ray(ox, oy, angle) for box in self.boxes)])
+            state[key] = min([IR_RANGE, *(box.ray(ox, oy, angle) for box in seen)])
         state.update(dict.fromkeys(CLIFF_SENSORS, False))
         state["docked"] = self._docked()
         state["v"], state["w"] = self.command
