@@ -121,3 +121,28 @@ def test_a_bad_control_rate_is_refused() -> None:
         assert str(caught.value) == (
             f"control_rate must be a positive number of ticks per second, got {rate!r}"
         )
+
+
+def test_a_bad_room_obstacle_or_pose_is_refused() -> None:
+    with pytest.raises(ValueError, match="room") as caught:
+        FakeWorld(room=(2.0, -2.0, -2.0, 2.0))
+    assert str(caught.value) == (
+        "room must be (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax, "
+        "got (2.0, -2.0, -2.0, 2.0)"
+    )
+    with pytest.raises(
+        ValueError, match=r"^an obstacle must be finite numbers, got \(0.0, 0.0, nan, 1.0\)$"
+    ):
+        FakeWorld(obstacles=[(0.0, 0.0, math.nan, 1.0)])
+    with pytest.raises(ValueError, match="would overlap") as caught:
+        FakeWorld(obstacles=[(-0.1, -0.1, 0.1, 0.1)], start=(0.2, 0.0, 0.0))
+    assert str(caught.value) == (
+        "the robot (radius 0.171 m) at (0.2, 0.0) would overlap "
+        "Box(x=0.0, y=0.0, yaw=0.0, hx=0.1, hy=0.1); place it where it is clear"
+    )
+    world = FakeWorld()
+    with pytest.raises(
+        ValueError, match=r"^the pose must be finite numbers, got \(0.0, inf, 0.0\)$"
+    ):
+        world.place(0.0, math.inf, 0.0)
+    assert world.read_sensors()["docked"] is True  # unchanged

@@ -6,7 +6,10 @@ control never came back to the walk. Here the reflex is an action that locks
 the wheels with a higher priority and ``preempt=True``: the current motion is
 cancelled (its cleanup stops the wheels), the reflex backs off and turns away,
 and the walk — which sees `ActionInterrupted`, an ordinary exception — simply
-goes on with its next move once the reflex has released the wheels.
+goes on with its next move once the reflex has released the wheels. So it
+does wherever the bump comes: while undocking, in the first drive, while
+docking (the tests press the bumper at each action boundary of a walk with
+`pyrobots_aio.testing.inject_bump`).
 
 It is written against `pyrobots_aio.motion.DriveBase` alone, so it runs
 unchanged on the simulated robot, a ROS 2 robot and the in-memory

@@ -108,6 +108,23 @@ def _room(xmin: float, ymin: float, xmax: float, ymax: float) -> list[Box]:
     ]
 
 
+def _finite(name: str, values: tuple[float, ...]) -> tuple[float, ...]:
+    if not all(isinstance(v, int | float) and math.isfinite(v) for v in values):
+        msg = f"{name} must be finite numbers, got {values!r}"
+        raise ValueError(msg)
+    return tuple(float(v) for v in values)
+
+
+def _bounds(name: str, box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    xmin, ymin, xmax, ymax = _finite(name, box)
+    if not (xmin < xmax and ymin < ymax):
+        msg = (
+            f"{name} must be (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax, got {box!r}"
+        )
+        raise ValueError(msg)
+    return xmin, ymin, xmax, ymax
+
+
 def _planar(x: float, y: float, yaw: float) -> NDArray[np.float64]:
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
@@ -139,7 +156,9 @@ class FakeWorld:
         obstacles: Iterable[tuple[float, float, float, float]] = (),
         start: Pose2D | None = None,
     ) -> None:
-        dx, dy, dyaw = dock
+        room = _bounds("room", room)
+        obstacles = [_bounds("an obstacle", box) for box in obstacles]
+        dx, dy, dyaw = _finite("dock", dock)
         depth, width = _DOCK_BLOCK
         behind = (dx - depth * math.cos(dyaw), dy - depth * math.sin(dyaw))
         self.dock = dock
@@ -156,7 +175,20 @@ class FakeWorld:
         self.place(*home)
 
     def place(self, x: float, y: float, yaw: float) -> None:
-        """Put the robot at ``(x, y, yaw)`` in the map; odometry restarts there."""
+        """Put the robot at ``(x, y, yaw)`` in the map; odometry restarts there.
+
+        Raises:
+            ValueError: Not finite numbers, or the robot would overlap a box.
+        """
+        x, y, yaw = _finite("the pose", (x, y, yaw))
+        for box in self.boxes:
+            nx, ny = box.nearest(x, y)
+            if math.hypot(x - nx, y - ny) < RADIUS:
+                msg = (
+                    f"the robot (radius {RADIUS} m) at ({x}, {y}) would overlap {box}; "
+                    "place it where it is clear"
+                )
+                raise ValueError(msg)
         self._pose = (x, y, yaw)
         self._odom = (0.0, 0.0, 0.0)
 
