@@ -5,8 +5,12 @@ not yet started) and how to read its true pose in ``map`` (the simulator's
 physics, the fake's world; a real robot's own localisation).
 
 The suite's modules run on the virtual-time loop (``virtual_time``):
-pytest-asyncio picks a test function's loop once for all its parameters, so
-a base that must follow the wall clock needs modules of its own.
+pytest-asyncio picks a test function's loop once for all its parameters
+(at collection, from the function's marks), so a base that must follow the
+wall clock (a ROS 2 robot driving another process) runs the same test
+functions from a module of its own: ``from test_motion import *`` with no
+``virtual_time`` mark and its own ``base`` fixture returning a `Base`
+(``truth`` can be ``lambda robot: robot.map_pose()`` there).
 """
 
 from __future__ import annotations
