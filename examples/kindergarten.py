@@ -27,9 +27,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from pyrobots_aio import (
+    ActionInterrupted,
     EventKind,
     ExecEvent,
-    Robot,
     TooManyActions,
     action,
 )
@@ -94,6 +94,7 @@ class Kid(SimRobot):
         self, seed: int, max_actions: int = SAFETY_CAP, instruments: Iterable[Instrument] = ()
     ) -> None:
         self.meter = PerMinute()
+        self.safety_cap = max_actions
         super().__init__(seed=seed, max_actions=max_actions, instruments=[self.meter, *instruments])
         self.reactions: Counter[str] = Counter()
         self.refused: Counter[str] = Counter()
@@ -137,7 +138,11 @@ async def look_at_child(robot: Kid) -> None:
 
 @action
 async def wander(robot: Kid, rng: random.Random) -> None:
-    """Slow random moves; one the safety cap refuses (it or a step of it) is skipped."""
+    """Slow random moves; one the safety cap refuses (it or a step of it) is skipped.
+
+    The bumper reflex may cut any step short, the undock too: the wander goes
+    on with its next move (a bump while undocking once ended it for good).
+    """
     while True:
         angle, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 0.8)
         try:
@@ -146,6 +151,8 @@ async def wander(robot: Kid, rng: random.Random) -> None:
             await move(robot, angle, distance)  # may be cut short by the bumper reflex
         except TooManyActions:
             robot.refused["move"] += 1
+        except ActionInterrupted:
+            pass  # the reflex took the wheels while undocking; it has turned the robot away
         await robot.sleep(rng.uniform(5.0, 20.0))
 
 
@@ -158,9 +165,19 @@ async def back_off(robot: Kid) -> None:
         robot.refused["back_off"] += 1
 
 
-async def session_script(robot: Robot, minutes: int, rng: random.Random) -> None:
-    """The children: pacifier, toy and a wandering child position, at random times."""
-    end = robot.time() + minutes * 60
+async def session_script(
+    robot: Kid,
+    minutes: int,
+    rng: random.Random,
+    progress: Callable[[int, int, int], object] | None = None,
+) -> None:
+    """The children: pacifier, toy and a wandering child position, at random times.
+
+    At the end of each simulated minute it calls ``progress(minute, actions, events)``
+    (the actions started and events fired in that minute), if given.
+    """
+    start = robot.time()
+    end, reported = start + minutes * 60, 0
     next_pacifier, next_toy = rng.uniform(30, 120), rng.uniform(10, 40)
     while robot.time() < end:
         await robot.sleep(1.0)
@@ -174,6 +191,47 @@ async def session_script(robot: Robot, minutes: int, rng: random.Random) -> None
                 robot.state.scale = robot.state.scale + rng.uniform(0.6, 1.5)
                 await robot.sleep(0.2)
             next_toy = now + rng.uniform(10, 60)
+        if progress is not None and robot.time() >= start + 60 * (reported + 1):
+            reported += 1
+            minute = reported - 1  # just completed
+            progress(reported, robot.meter.actions[minute], robot.meter.events[minute])
+
+
+async def session(
+    robot: Kid,
+    minutes: int = 68,
+    seed: int = 0,
+    progress: Callable[[int, int, int], object] | None = None,
+) -> Session:
+    """Run the session on ``robot`` (running); see `session_script` for ``progress``."""
+    rng = random.Random(seed)
+    # one stream each: how long the robot's moves take does not change the children's script
+    blink_rng, walk_rng, script_rng = (random.Random(rng.getrandbits(64)) for _ in range(3))
+    robot.meter.start = robot.time()
+    robot.state.update(pacifier=True, scale=0.0, child_x=1.0, child_y=0.0)
+    robot.whenever("pacifier", becomes=False).do(robot.react, "cry")
+    robot.whenever("pacifier", becomes=True).do(robot.react, "thank")
+    robot.whenever("scale", increase=0.5).do(robot.react, "giggle")
+    robot.whenever("bumper", becomes=True).do(robot.attempt, "back_off", back_off)
+    robot.whenever("ir_front_center_left", below=0.15, max_firing_freq=0.2).do(robot.react, "hello")
+    background = [blink(robot, blink_rng), look_at_child(robot), wander(robot, walk_rng)]
+    await session_script(robot, minutes, script_rng, progress)
+    for handle in background:
+        handle.cancel("the session is over")
+    await asyncio.gather(*(h.wait_done() for h in background))
+    actions = [robot.meter.actions[m] for m in range(minutes)]
+    events = [robot.meter.events[m] for m in range(minutes)]
+    return Session(
+        minutes=minutes,
+        actions_per_minute=sum(actions) / minutes,
+        peak_actions_per_minute=max(actions),
+        events_per_minute=sum(events) / minutes,
+        peak_events_per_minute=max(events),
+        safety_cap=robot.safety_cap,
+        cap_hits=robot.refused.total(),
+        reactions=robot.reactions,
+        refused=robot.refused,
+    )
 
 
 async def main(
@@ -181,39 +239,11 @@ async def main(
     seed: int = 0,
     max_actions: int = SAFETY_CAP,
     instruments: Iterable[Instrument] = (),
+    progress: Callable[[int, int, int], object] | None = None,
 ) -> Session:
     """Run the session; ``instruments`` also receive the executive's events."""
-    rng = random.Random(seed)
-    # one stream each: how long the robot's moves take does not change the children's script
-    blink_rng, walk_rng, script_rng = (random.Random(rng.getrandbits(64)) for _ in range(3))
     async with Kid(seed, max_actions, instruments) as robot:
-        robot.meter.start = robot.time()
-        robot.state.update(pacifier=True, scale=0.0, child_x=1.0, child_y=0.0)
-        robot.whenever("pacifier", becomes=False).do(robot.react, "cry")
-        robot.whenever("pacifier", becomes=True).do(robot.react, "thank")
-        robot.whenever("scale", increase=0.5).do(robot.react, "giggle")
-        robot.whenever("bumper", becomes=True).do(robot.attempt, "back_off", back_off)
-        robot.whenever("ir_front_center_left", below=0.15, max_firing_freq=0.2).do(
-            robot.react, "hello"
-        )
-        background = [blink(robot, blink_rng), look_at_child(robot), wander(robot, walk_rng)]
-        await session_script(robot, minutes, script_rng)
-        for handle in background:
-            handle.cancel("the session is over")
-        await asyncio.gather(*(h.wait_done() for h in background))
-        actions = [robot.meter.actions[m] for m in range(minutes)]
-        events = [robot.meter.events[m] for m in range(minutes)]
-        return Session(
-            minutes=minutes,
-            actions_per_minute=sum(actions) / minutes,
-            peak_actions_per_minute=max(actions),
-            events_per_minute=sum(events) / minutes,
-            peak_events_per_minute=max(events),
-            safety_cap=max_actions,
-            cap_hits=robot.refused.total(),
-            reactions=robot.reactions,
-            refused=robot.refused,
-        )
+        return await session(robot, minutes, seed, progress)
 
 
 if __name__ == "__main__":
@@ -223,7 +253,14 @@ if __name__ == "__main__":
     parser.add_argument("--cap", type=int, default=SAFETY_CAP, help="the safety cap (max_actions)")
     options = parser.parse_args()
     install_console_handler(logging.WARNING)  # INFO would log each of the session's bumps
-    result = run(main, options.minutes, options.seed, options.cap)
+
+    def show(minute: int, actions: int, events: int) -> None:
+        print(
+            f"minute {minute:2}/{options.minutes}: {actions:3} actions, {events:2} events",
+            flush=True,
+        )
+
+    result = run(main, options.minutes, options.seed, options.cap, (), show)
     print(f"{result.minutes} simulated minutes")
     peak = result.peak_actions_per_minute
     print(f"actions per minute: {result.actions_per_minute:.0f} (peak {peak})")

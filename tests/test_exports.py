@@ -12,6 +12,7 @@ PUBLIC = [
     "pyrobots_aio",
     "pyrobots_aio.actions",
     "pyrobots_aio.events",
+    "pyrobots_aio.motion",
     "pyrobots_aio.poses",
     "pyrobots_aio.resources",
     "pyrobots_aio.robot",
@@ -35,7 +36,7 @@ def test_the_design_names_are_importable_from_the_package() -> None:
         "Robot", "GenericRobot", "action", "ActionHandle", "Outcome", "ActionCancelled",
         "ActionInterrupted", "ActionSkipped", "TooManyActions", "PyRobotsError", "Resource",
         "CompoundResource", "lock", "Pose", "FrameProvider", "InvalidPoseError",
-        "UnknownFrameError", "EventMonitor", "StateStore", "ActionInfo",
+        "UnknownFrameError", "EventMonitor", "StateStore", "ActionInfo", "DriveBase",
     }  # fmt: skip
     assert names <= set(pyrobots_aio.__all__)
     assert pyrobots_aio.ActionCancelled is __import__("asyncio").CancelledError

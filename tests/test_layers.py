@@ -19,6 +19,7 @@ LAYERS = {
     "actions": 3,
     "events": 3,
     "robot": 4,
+    "motion": 4.5,
     "recording": 5,
     "sim": 5,
     "testing": 5,

@@ -6,7 +6,8 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 2. ``resources``, ``state``, ``poses``
 3. ``actions``, ``events``
 4. ``robot`` (the composition root)
-5. ``recording``, ``sim``, ``testing``, ``cli`` (public API only)
+5. ``motion`` (`DriveBase`: the motion actions, over any base)
+6. ``recording``, ``sim``, ``testing``, ``cli`` (public API only)
 """
 
 from ._core._instrument import EventKind as EventKind
@@ -26,6 +27,7 @@ from ._exceptions import InvalidResourceError as InvalidResourceError
 from ._exceptions import LockstepError as LockstepError
 from ._exceptions import LockUsageError as LockUsageError
 from ._exceptions import ModelLoadError as ModelLoadError
+from ._exceptions import MotionError as MotionError
 from ._exceptions import PoseError as PoseError
 from ._exceptions import PyRobotsError as PyRobotsError
 from ._exceptions import RecordingError as RecordingError
@@ -47,6 +49,7 @@ from .actions import action as action
 from .actions import lock as lock
 from .events import EventManager as EventManager
 from .events import EventMonitor as EventMonitor
+from .motion import DriveBase as DriveBase
 from .poses import FrameProvider as FrameProvider
 from .poses import FrameTree as FrameTree
 from .poses import Pose as Pose
@@ -78,6 +81,7 @@ __all__ = [
     "BoundAction",
     "CompoundResource",
     "CorruptRecordingError",
+    "DriveBase",
     "EventKind",
     "EventLoopError",
     "EventManager",
@@ -93,6 +97,7 @@ __all__ = [
     "LockUsageError",
     "LockstepError",
     "ModelLoadError",
+    "MotionError",
     "Outcome",
     "Pose",
     "PoseError",

@@ -25,6 +25,7 @@ PyRobotsError
 │   ├── SimulationUnavailableError  mujoco is not installed
 │   ├── ModelLoadError            an MJCF file that does not load
 │   └── LockstepError             a lockstep robot outside the lockstep loop
+├── MotionError                   a motion action that cannot do its job (docking failed)
 └── RecordingError
     └── CorruptRecordingError     a recording line that cannot be read (.line)
 ```
@@ -217,6 +218,10 @@ class ModelLoadError(SimulationError):
 
 class LockstepError(SimulationError):
     """A lockstep simulated robot was used outside the lockstep event loop."""
+
+
+class MotionError(PyRobotsError):
+    """A motion action of a `DriveBase` could not do its job (docking failed)."""
 
 
 class RecordingError(PyRobotsError):

@@ -148,7 +148,7 @@ def test_on_a_terminal_the_status_is_redrawn_in_place() -> None:
     assert code == 0, output
     assert "\x1b[J" in output  # the live block is erased before each redraw
     assert "random walk " in output
-    assert "  running undock#1 running holds wheels at _robot.py:" in output
+    assert "  running undock#1 running holds wheels at _base.py:" in output
     assert "  state   bumper=False  docked=" in output
     assert "\x1b[32mINFO   \x1b[0m sim.random_walk  bumper_reflex#" in output  # coloured log lines
     assert "start    undock#1" not in output  # on a terminal, routine starts are not listed

@@ -1,7 +1,12 @@
+"""SimRobot as a simulator: its ticks, clocks, determinism and physics figures.
+
+Its motion as a `DriveBase` (the actions, the bumper, cancelling) is tested on
+every base alike in tests/motion.
+"""
+
 from __future__ import annotations
 
 import asyncio
-import itertools
 import math
 from typing import TYPE_CHECKING, Any
 
@@ -12,9 +17,8 @@ from pyrobots_aio.sim import WHEELS, SimRobot, run
 from pyrobots_aio.sim._robot import ANGLE_TOLERANCE
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Mapping
+    from collections.abc import Mapping
 
-    from pyrobots_aio.actions import ActionHandle
 
 pytestmark = pytest.mark.virtual_time
 
@@ -44,59 +48,6 @@ async def test_starts_docked_and_publishes_every_tick() -> None:
         assert robot.state.version("bumper") == version + 500
         assert robot.state.timestamp("bumper") == pytest.approx(robot.time())
         assert robot.time() == pytest.approx(10.0)
-
-
-@pytest.mark.asyncio
-async def test_drive_distance_and_rotate_angle_reach_their_targets() -> None:
-    async with SimRobot() as robot:
-        await robot.undock()
-        x0, y0, _ = robot.world.base_pose()
-        done = await robot.drive_distance(0.8)
-        assert done == pytest.approx(0.8, abs=0.003)
-        x1, y1, _ = robot.world.base_pose()
-        assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(0.8, abs=0.01)
-        turned = await robot.rotate_angle(-math.pi / 2)
-        assert turned == pytest.approx(-math.pi / 2, abs=0.006)
-        back = await robot.drive_distance(-0.3)
-        assert back == pytest.approx(-0.3, abs=0.003)
-        await robot.sleep(0.1)  # the wheels were stopped; the next ticks publish it
-        assert robot.state.v == pytest.approx(0.0, abs=0.01)
-
-
-@pytest.mark.asyncio
-async def test_navigate_to_a_map_pose_and_back_to_the_dock() -> None:
-    async with SimRobot() as robot:
-        await robot.undock()
-        await robot.navigate_to((0.0, 0.5, 0.0, 0.0, 0.0, math.pi / 2))
-        x, y, yaw = robot.world.base_pose()
-        assert (x, y) == (pytest.approx(0.0, abs=0.02), pytest.approx(0.5, abs=0.02))
-        assert yaw == pytest.approx(math.pi / 2, abs=0.01)
-        me = robot.poses.myself()
-        assert (me.x, me.y) == (pytest.approx(x), pytest.approx(y))
-        assert not robot.state.docked
-        await robot.dock()
-        assert robot.state.docked
-        assert robot.state.bumper is False
-
-
-@pytest.mark.asyncio
-async def test_driving_into_a_wall_presses_the_bumper_and_lowers_ir() -> None:
-    async with SimRobot() as robot:
-        await robot.undock()
-        readings = []
-        robot.drive(0.25, 0.0)
-        while not robot.state.bumper:
-            await robot.sleep(0.1)
-            readings.append(robot.state.ir_front_center_left)
-            assert robot.time() < 30, "never reached the east wall"
-        robot.stop()
-        assert robot.state.bumper_left
-        assert robot.state.bumper_right
-        seen = [r for r in readings if r < 0.4]
-        assert len(seen) >= 5
-        assert all(later <= earlier + 0.01 for earlier, later in itertools.pairwise(seen))
-        assert seen[-1] < 0.1
-        assert robot.world.base_pose()[0] > 1.7
 
 
 @pytest.mark.asyncio
@@ -192,36 +143,6 @@ async def test_rotate_angle_turns_the_true_heading(angle: float) -> None:
         assert math.hypot(x - x0, y - y0) < 0.002  # in place
 
 
-MOTIONS: dict[str, Callable[[SimRobot], ActionHandle[Any]]] = {
-    "navigate_to": lambda robot: robot.navigate_to((1.0, 0.5, 0.0, 0.0, 0.0, 0.0)),
-    "rotate_angle": lambda robot: robot.rotate_angle(3.0),
-    "dock": lambda robot: robot.dock(),
-    "undock": lambda robot: robot.undock(),
-}
-
-
-@pytest.mark.asyncio
-@pytest.mark.parametrize("name", sorted(MOTIONS))
-async def test_cancelling_any_motion_stops_the_wheels_and_releases_them(name: str) -> None:
-    async with SimRobot() as robot:
-        if name != "undock":
-            await robot.undock()
-            await robot.drive_distance(0.5)
-        handle = MOTIONS[name](robot)
-        await robot.sleep(0.5)
-        assert robot.resources.owner(WHEELS) is not None
-        assert robot.world.command != (0.0, 0.0)  # moving
-        handle.cancel("stop now")
-        with pytest.raises(ActionInterrupted, match="stop now"):
-            await handle
-        assert robot.world.command == (0.0, 0.0)
-        assert robot.resources.owner(WHEELS) is None
-        await robot.sleep(0.5)
-        assert robot.state.v == pytest.approx(0.0, abs=0.005)
-        assert robot.state.w == pytest.approx(0.0, abs=0.01)
-        assert handle.outcome is Outcome.CANCELLED
-
-
 def test_lockstep_robot_under_an_ordinary_loop_says_so() -> None:
     async def main() -> None:
         async with SimRobot():
@@ -264,7 +185,7 @@ def test_bad_arguments_are_rejected() -> None:
 
 
 @pytest.mark.asyncio
-async def test_bad_motion_arguments_fail_the_action() -> None:
+async def test_bad_motion_arguments_fail_the_action_and_leave_the_wheels_still() -> None:
     async with SimRobot() as robot:
         with pytest.raises(ValueError, match=r"speed must be positive, got -1"):
             await robot.drive_distance(1.0, speed=-1)

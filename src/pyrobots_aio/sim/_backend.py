@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 from .._core._clock import is_virtual
 from .._exceptions import LockstepError
+from ..motion import Controllers
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -61,7 +62,7 @@ class SimBackend:
         self._robot: Robot | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._timer: asyncio.TimerHandle | None = None
-        self._controllers: dict[Callable[[], bool], asyncio.Future[None]] = {}
+        self._controllers = Controllers()
 
     async def start(self, robot: Robot) -> None:
         """Publish the first sensor readings and start ticking."""
@@ -86,10 +87,7 @@ class SimBackend:
             self._timer.cancel()
             self._timer = None
         self.world.stop()
-        for fut in self._controllers.values():
-            if not fut.done():
-                fut.cancel()
-        self._controllers.clear()
+        self._controllers.cancel()
         self._robot = None
 
     async def control(self, controller: Callable[[], bool]) -> None:
@@ -101,12 +99,7 @@ class SimBackend:
         if self._loop is None:
             msg = "the simulated robot is not running; use 'async with robot:' first"
             raise LockstepError(msg)
-        fut = self._loop.create_future()
-        self._controllers[controller] = fut
-        try:
-            await fut
-        finally:
-            self._controllers.pop(controller, None)
+        await self._controllers.control(controller)
 
     def _tick(self) -> None:
         robot, loop = self._robot, self._loop
@@ -123,16 +116,7 @@ class SimBackend:
         self._timer = loop.call_at(self.world.time_after(self.steps_per_tick), self._tick)
 
     def _run_controllers(self) -> None:
-        for controller, fut in list(self._controllers.items()):
-            if fut.done():
-                continue
-            try:
-                finished = controller()
-            except Exception as exc:  # the waiting action gets the error
-                fut.set_exception(exc)
-                continue
-            if finished:
-                fut.set_result(None)
+        self._controllers.run()
 
     def __repr__(self) -> str:
         mode = "realtime" if self.realtime else "lockstep"

@@ -1,15 +1,12 @@
-"""Dead reckoning from the wheel encoders, and the angle arithmetic the simulator shares."""
+"""Dead reckoning from the wheel encoders, as the robot's firmware does it."""
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["Odometry", "wrap_angle"]
+from ..motion import wrap_angle
 
-
-def wrap_angle(angle: float) -> float:
-    """Return ``angle`` (radians) wrapped into ``[-pi, pi]``."""
-    return math.atan2(math.sin(angle), math.cos(angle))
+__all__ = ["Odometry"]
 
 
 class Odometry:

@@ -6,9 +6,15 @@ control never came back to the walk. Here the reflex is an action that locks
 the wheels with a higher priority and ``preempt=True``: the current motion is
 cancelled (its cleanup stops the wheels), the reflex backs off and turns away,
 and the walk — which sees `ActionInterrupted`, an ordinary exception — simply
-goes on with its next move once the reflex has released the wheels.
+goes on with its next move once the reflex has released the wheels. So it
+does wherever the bump comes: while undocking, in the first drive, while
+docking (the tests press the bumper at each action boundary of a walk with
+`pyrobots_aio.testing.inject_bump`).
 
-Run it with ``pyrobots-aio demo random-walk`` or ``python examples/random_walk.py``.
+It is written against `pyrobots_aio.motion.DriveBase` alone, so it runs
+unchanged on the simulated robot, a ROS 2 robot and the in-memory
+`pyrobots_aio.testing.FakeBase`; importing it needs no MuJoCo. Run it with
+``pyrobots-aio demo random-walk`` or ``python examples/random_walk.py``.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ from dataclasses import dataclass
 
 from .._exceptions import ActionInterrupted
 from ..actions import action, lock
-from ._robot import WHEELS, SimRobot
+from ..motion import WHEELS, DriveBase
 
 _log = logging.getLogger("pyrobots_aio.sim.random_walk")
 
@@ -29,6 +35,9 @@ REFLEX_PRIORITY = 10
 BACK_OFF = 0.15
 """Metres the reflex backs off after a bump."""
 DOCK_ATTEMPTS = 5
+"""Docking attempts before the walk gives up (each interrupted one detours first)."""
+LEAVE_DOCK = 0.5
+"""Metres driven straight out after undocking, before the random moves."""
 DETOUR = 0.4
 """Metres driven on, the way the reflex left the robot facing, before docking again."""
 
@@ -54,17 +63,23 @@ class WalkReport:
 
 @action
 @lock(WHEELS, priority=REFLEX_PRIORITY, preempt=True)
-async def bumper_reflex(robot: SimRobot) -> None:
-    """Back off, then turn away from the side that was hit (both sides: turn round)."""
+async def bumper_reflex(robot: DriveBase) -> None:
+    """Back off, then turn away from the side that was hit (both sides: turn round).
+
+    On the dock it only turns: the dock is behind (backing into it stalls the wheels).
+    """
     left, right = robot.state.bumper_left, robot.state.bumper_right
     turn = -0.9 if left and not right else 0.9 if right and not left else 0.75 * math.pi
-    _log.info("bump (left=%s right=%s): backing off and turning %.2f rad", left, right, turn)
-    await robot.drive_distance(-BACK_OFF)
+    if robot.state.docked:
+        _log.info("bump on the dock (left=%s right=%s): turning %.2f rad", left, right, turn)
+    else:
+        _log.info("bump (left=%s right=%s): backing off and turning %.2f rad", left, right, turn)
+        await robot.drive_distance(-BACK_OFF)
     await robot.rotate_angle(turn)
 
 
 @action
-async def move(robot: SimRobot, angle: float, distance: float) -> bool:
+async def move(robot: DriveBase, angle: float, distance: float) -> bool:
     """One random-walk move: turn by ``angle``, then drive ``distance``.
 
     Returns False if the bumper reflex preempted it (an outcome, not a failure).
@@ -79,12 +94,12 @@ async def move(robot: SimRobot, angle: float, distance: float) -> bool:
 
 
 async def random_walk(
-    robot: SimRobot, *, moves: int = 10, duration: float | None = None, seed: int = 0
+    robot: DriveBase, *, moves: int = 10, duration: float | None = None, seed: int = 0
 ) -> WalkReport:
     """Undock, drive out, make random moves, dock; a bumper reflex handles collisions.
 
     Args:
-        robot: A running simulated robot (it starts docked).
+        robot: A running robot base (it starts docked, as a Create 3 does).
         moves: Random turn-and-drive moves to make.
         duration: If given, keep making moves until this many simulated seconds
             have passed since the start (at least ``moves`` moves are made first).
@@ -95,8 +110,7 @@ async def random_walk(
     reflex = robot.whenever("bumper", becomes=True).do(bumper_reflex)
     done = interrupted = 0
     try:
-        await robot.undock()
-        await robot.drive_distance(0.5)
+        await _leave_dock(robot)
         while done < moves or (duration is not None and robot.time() - start < duration):
             angle, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.3, 1.0)
             if not await move(robot, angle, distance):
@@ -104,26 +118,45 @@ async def random_walk(
             done += 1
         docked = await _dock(robot)
         reflex.stop_monitoring()
-        await _reflex_done(robot)  # a bump at the very end: let the reflex back off
+        await _reflexes_done(robot)  # a bump at the very end: let the reflex back off
     finally:
         await reflex.close()
+    docked = docked and bool(robot.state.docked)
     return WalkReport(done, reflex.firings, interrupted, docked, robot.time() - start)
 
 
-async def _dock(robot: SimRobot) -> bool:
-    """Dock; after a bump, go round the obstacle (bug-style) instead of retrying straight."""
+async def _leave_dock(robot: DriveBase) -> None:
+    """Undock and drive out `LEAVE_DOCK`; a bump on the way is the reflex's, and the walk goes on.
+
+    (The Create 3 script's walk died here: a bump during the undock or the
+    first drive ended it, and the reflex with it.)
+    """
+    try:
+        await robot.undock()
+        await robot.drive_distance(LEAVE_DOCK)
+    except ActionInterrupted as stop:
+        _log.info("leaving the dock interrupted: %s", stop.reason)
+
+
+async def _dock(robot: DriveBase) -> bool:
+    """Dock; after a bump, go round the obstacle (bug-style) instead of retrying straight.
+
+    A bump just as the robot docked makes the reflex back it off the dock: it docks again.
+    """
     for attempt in range(1, DOCK_ATTEMPTS + 1):
         try:
             await robot.dock()
         except ActionInterrupted:
             _log.info("docking attempt %d interrupted by a bump; detouring", attempt)
             await _detour(robot)
-        else:
+            continue
+        await _reflexes_done(robot)
+        if robot.state.docked:
             return True
     return bool(robot.state.docked)
 
 
-async def _detour(robot: SimRobot) -> None:
+async def _detour(robot: DriveBase) -> None:
     """Drive on `DETOUR` metres once the reflex has turned away (it may bump again)."""
     try:
         await robot.drive_distance(DETOUR)  # queued behind the reflex, which holds the wheels
@@ -131,8 +164,8 @@ async def _detour(robot: SimRobot) -> None:
         _log.info("detour interrupted by a bump")
 
 
-async def _reflex_done(robot: SimRobot) -> None:
-    """Wait until a bumper reflex holding the wheels is done."""
-    holder = robot.resources.owner(WHEELS)
-    if holder is not None and holder.name == bumper_reflex.name:
-        await holder.wait_done()
+async def _reflexes_done(robot: DriveBase) -> None:
+    """Wait until every bumper reflex started so far is done (at once if there is none)."""
+    for handle in robot.handles():
+        if handle.name == bumper_reflex.name:
+            await handle.wait_done()

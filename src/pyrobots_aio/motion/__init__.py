@@ -1,0 +1,35 @@
+"""One motion layer for every differential-drive base: `DriveBase` and its actions.
+
+A base (the simulator's `pyrobots_aio.sim.SimRobot`, a ROS 2 robot, or the
+in-memory `pyrobots_aio.testing.FakeBase`) provides the seam: a velocity
+command, odometry and a per-tick control hook (`Controllers`). The motion
+actions (``drive_distance``, ``rotate_angle``, ``navigate_to``, ``dock``,
+``undock``) and the random walk (`pyrobots_aio.sim.random_walk`) are written
+once against it, so the same behaviour runs on each.
+"""
+
+from ._base import ANGLE_TOLERANCE as ANGLE_TOLERANCE
+from ._base import DISTANCE_TOLERANCE as DISTANCE_TOLERANCE
+from ._base import DOCK_APPROACH as DOCK_APPROACH
+from ._base import UNDOCK_DISTANCE as UNDOCK_DISTANCE
+from ._base import WHEELS as WHEELS
+from ._base import DriveBase as DriveBase
+from ._base import Pose2D as Pose2D
+from ._base import World as World
+from ._base import WorldBase as WorldBase
+from ._control import Controllers as Controllers
+from ._math import wrap_angle as wrap_angle
+
+__all__ = [
+    "ANGLE_TOLERANCE",
+    "DISTANCE_TOLERANCE",
+    "DOCK_APPROACH",
+    "UNDOCK_DISTANCE",
+    "WHEELS",
+    "Controllers",
+    "DriveBase",
+    "Pose2D",
+    "World",
+    "WorldBase",
+    "wrap_angle",
+]

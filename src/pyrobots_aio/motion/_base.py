@@ -1,0 +1,290 @@
+"""DriveBase: the seam between the motion layer and any differential-drive base.
+
+The motion actions (`DriveBase.drive_distance`, `rotate_angle`,
+`navigate_to`, `dock`, `undock`) are written once here, against a handful of
+primitives a base provides: the simulator (`pyrobots_aio.sim.SimRobot`), a
+ROS 2 robot, or the in-memory `pyrobots_aio.testing.FakeBase`. Every motion
+action locks `WHEELS`, drives through a per-tick controller on the base's
+own measures (as a robot's firmware would), and stops the wheels when it ends
+for any reason, cancellation and preemption included.
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+from typing import TYPE_CHECKING, Protocol
+
+from .._exceptions import MotionError
+from ..actions import action, lock
+from ..resources import Resource
+from ..robot import Robot
+from ._math import checked, ramp, wrap_angle
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from ..poses import PoseLike
+
+WHEELS = Resource("wheels")
+"""The drive wheels: every motion action holds them."""
+
+DISTANCE_TOLERANCE = 0.002
+"""Metres: `DriveBase.drive_distance` and `DriveBase.navigate_to` stop at most this far off.
+
+They stop at the control tick nearest the goal, by their own measure (odometry
+for the first, the map pose for the second): closer, at their slowest speeds.
+"""
+ANGLE_TOLERANCE = 0.005
+"""Radians: `DriveBase.rotate_angle` and `DriveBase.navigate_to` stop at most this far off.
+
+As `DISTANCE_TOLERANCE`; odometry (`rotate_angle`) also slips from the true
+heading (on the simulator, by about 0.05% of the turn).
+"""
+DOCK_APPROACH = (0.45, 0.0, 0.0, "dock")
+"""Where `DriveBase.dock` goes before reversing onto the dock (in the dock's frame)."""
+UNDOCK_DISTANCE = 0.35
+"""Metres `DriveBase.undock` drives straight ahead, off the dock."""
+_MIN_V, _MIN_W = 0.03, 0.15
+_DOCK_SPEED, _DOCK_REVERSE_LIMIT = 0.05, 0.7
+
+Pose2D = tuple[float, float, float]
+"""A planar pose ``(x, y, yaw)``, in metres and radians."""
+
+
+class DriveBase(Robot, abc.ABC):
+    """A differential-drive robot base: ``drive(v, w)``, ``stop()`` and the motion actions.
+
+    The seam. A base implements four things and gets everything else:
+
+    - ``_set_velocity(v, w)``: command linear speed ``v`` (m/s) and angular
+      speed ``w`` (rad/s) until the next command (``cmd_vel``); ``drive``
+      checks the numbers first.
+    - `odom_pose`: ``(x, y, yaw)`` dead-reckoned in the ``odom`` frame.
+    - `control_period` and ``await control(step)``: call ``step()`` after each
+      fresh sensor update (a control tick, an odometry message) until it
+      returns True; an exception from ``step`` ends the wait with it.
+      `Controllers` does the bookkeeping.
+
+    It may override `map_pose` (by default ``base_link`` in ``map``, through
+    ``robot.poses``). It publishes the state keys ``bumper``,
+    ``bumper_left``, ``bumper_right``, ``ir_<position>``,
+    ``cliff_<position>``, ``docked``, ``v`` and ``w``, and provides the
+    frames ``odom``, ``base_link`` and, for `dock`, ``dock``.
+
+    Example:
+        >>> from pyrobots_aio.sim import run
+        >>> from pyrobots_aio.testing import FakeBase
+        >>> async def main() -> float:
+        ...     async with FakeBase() as robot:
+        ...         await robot.undock()
+        ...         return round(await robot.rotate_angle(1.0), 2)
+        >>> run(main)
+        1.0
+    """
+
+    # -- the seam ---------------------------------------------------------
+
+    @abc.abstractmethod
+    def _set_velocity(self, v: float, w: float) -> None:
+        """Command ``v`` (m/s) and ``w`` (rad/s), finite numbers, until the next command."""
+
+    @abc.abstractmethod
+    def odom_pose(self) -> Pose2D:
+        """The pose ``(x, y, yaw)`` dead-reckoned from the wheels, in the ``odom`` frame."""
+
+    @property
+    @abc.abstractmethod
+    def control_period(self) -> float:
+        """Seconds between sensor updates (control ticks)."""
+
+    @abc.abstractmethod
+    async def control(self, step: Callable[[], bool]) -> None:
+        """Call ``step()`` after each fresh sensor update until it returns True.
+
+        ``step`` reads the fresh state and sets the wheel command; the motion
+        actions are built on it. Cancelling the wait removes it.
+        """
+
+    def map_pose(self) -> Pose2D:
+        """The robot's pose ``(x, y, yaw)`` in the ``map`` frame (where it is localised)."""
+        me = self.poses.myself()
+        return me.x, me.y, self.poses.euler(me)[2]
+
+    # -- direct commands --------------------------------------------------
+
+    def drive(self, v: float, w: float) -> None:
+        """Command linear speed ``v`` (m/s) and angular speed ``w`` (rad/s) until changed.
+
+        A plain call that does not lock the wheels; actions lock `WHEELS` first.
+        """
+        self._set_velocity(checked("v", v), checked("w", w))
+
+    def stop(self) -> None:
+        """Stop the wheels."""
+        self._set_velocity(0.0, 0.0)
+
+    # -- motion actions ---------------------------------------------------
+
+    @action
+    @lock(WHEELS)
+    async def drive_distance(self, distance: float, speed: float = 0.2) -> float:
+        """Drive straight ``distance`` metres (negative: backwards); return the distance done."""
+        goal = checked("distance", distance)
+        top = checked("speed", speed, positive=True)
+        x0, y0, _ = self.odom_pose()
+
+        def travelled() -> float:
+            x, y, _ = self.odom_pose()
+            return math.hypot(x - x0, y - y0)
+
+        def step() -> bool:
+            remaining = abs(goal) - travelled()
+            v = ramp(remaining, top, _MIN_V)
+            if self._arrived(remaining, v, DISTANCE_TOLERANCE):
+                self.stop()
+                return True
+            self._set_velocity(v if goal >= 0 else -v, 0.0)
+            return False
+
+        await self._steer(step)
+        return math.copysign(travelled(), goal)
+
+    @action
+    @lock(WHEELS)
+    async def rotate_angle(self, angle: float, speed: float = 1.0) -> float:
+        """Turn in place by ``angle`` radians (positive: counter-clockwise); return the turn."""
+        goal = checked("angle", angle)
+        top = checked("speed", speed, positive=True)
+        turned, last = 0.0, self.odom_pose()[2]
+
+        def step() -> bool:
+            nonlocal turned, last
+            yaw = self.odom_pose()[2]
+            turned, last = turned + wrap_angle(yaw - last), yaw
+            remaining = goal - turned
+            w = ramp(remaining, top, _MIN_W)
+            if self._arrived(remaining, w, ANGLE_TOLERANCE):
+                self.stop()
+                return True
+            self._set_velocity(0.0, w)
+            return False
+
+        await self._steer(step)
+        return turned
+
+    @action
+    @lock(WHEELS)
+    async def navigate_to(self, pose: PoseLike, speed: float = 0.2) -> None:
+        """Go to ``pose`` (any format ``robot.poses.get`` reads): turn, drive, then turn to its yaw.
+
+        It localises on the map (`map_pose`), as a robot with a localisation
+        stack (or the Create 3 with its dock beacon) would, and follows a
+        straight line: no planning, obstacles are the bumper's business.
+        """
+        top = checked("speed", speed, positive=True)
+        target = self.poses.inframe(pose, "map")
+        tx, ty, tyaw = target.x, target.y, self.poses.euler(target)[2]
+
+        def step() -> bool:
+            x, y, yaw = self.map_pose()
+            dist = math.hypot(tx - x, ty - y)
+            if dist > DISTANCE_TOLERANCE * 5:
+                error = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
+                v = 0.0 if abs(error) > 0.3 else ramp(dist, top, _MIN_V)
+                self._set_velocity(v, ramp(error, 1.0, _MIN_W) if abs(error) > 0.01 else 0.0)
+                return False
+            error = wrap_angle(tyaw - yaw)
+            w = ramp(error, 1.0, _MIN_W)
+            if self._arrived(error, w, ANGLE_TOLERANCE):
+                self.stop()
+                return True
+            self._set_velocity(0.0, w)
+            return False
+
+        await self._steer(step)
+
+    @action
+    @lock(WHEELS)
+    async def undock(self) -> None:
+        """Leave the dock: drive `UNDOCK_DISTANCE` straight ahead (nothing to do if not docked)."""
+        if self.state["docked"]:
+            await self.drive_distance(UNDOCK_DISTANCE)
+
+    @action
+    @lock(WHEELS)
+    async def dock(self) -> None:
+        """Go in front of the dock (`DOCK_APPROACH`), then reverse slowly onto it until ``docked``.
+
+        Raises:
+            MotionError: The robot reversed 0.7 m without docking.
+        """
+        if self.state["docked"]:
+            return
+        await self.navigate_to(DOCK_APPROACH)
+        x0, y0, _ = self.odom_pose()
+
+        def step() -> bool:
+            if self.state["docked"]:
+                self.stop()
+                return True
+            x, y, _ = self.odom_pose()
+            if math.hypot(x - x0, y - y0) > _DOCK_REVERSE_LIMIT:
+                msg = f"docking failed: reversed {_DOCK_REVERSE_LIMIT} m without touching the dock"
+                raise MotionError(msg)
+            self._set_velocity(-_DOCK_SPEED, 0.0)
+            return False
+
+        await self._steer(step)
+
+    def _arrived(self, remaining: float, speed: float, tolerance: float) -> bool:
+        """Whether to stop now, ``remaining`` from the goal and about to go at ``speed``.
+
+        It stops at the control tick nearest the goal: within ``tolerance`` and
+        within half the way one more tick at ``speed`` would go. (Stopping at the
+        first tick within tolerance stopped short by up to the tolerance, every time.)
+        """
+        return abs(remaining) <= min(tolerance, abs(speed) * self.control_period / 2)
+
+    async def _steer(self, step: Callable[[], bool]) -> None:
+        """Run ``step`` now and after every tick until it returns True; stop the wheels after."""
+        try:
+            if not step():
+                await self.control(step)
+        finally:
+            self.stop()
+
+
+class World(Protocol):
+    """What `WorldBase` needs of the world it owns (`SimWorld`, `FakeWorld`)."""
+
+    def set_command(self, v: float, w: float) -> None:
+        """Drive at ``v`` (m/s) and ``w`` (rad/s) until the next command."""
+
+    def odom_pose(self) -> Pose2D:
+        """The pose dead-reckoned from the wheels, in the ``odom`` frame."""
+
+    def base_pose(self) -> Pose2D:
+        """The true pose, in the ``map`` frame."""
+
+
+class WorldBase(DriveBase):
+    """A `DriveBase` over a simulated world it owns, ``robot.world`` (a `World`).
+
+    The velocity command and odometry are the world's, and the map pose is
+    its true pose (a simulated robot is perfectly localised). A subclass sets
+    ``self.world`` and still provides `control_period` and `control`.
+    """
+
+    world: World
+
+    def _set_velocity(self, v: float, w: float) -> None:
+        self.world.set_command(v, w)
+
+    def odom_pose(self) -> Pose2D:
+        """The pose dead-reckoned by the world, in the ``odom`` frame."""
+        return self.world.odom_pose()
+
+    def map_pose(self) -> Pose2D:
+        """The world's true pose of the robot, in the ``map`` frame."""
+        return self.world.base_pose()

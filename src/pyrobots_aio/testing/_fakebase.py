@@ -1,0 +1,386 @@
+"""FakeBase: a `DriveBase` in memory, for testing behaviours without a simulator.
+
+A round robot of the Create 3's size moves as a unicycle in a walled room with
+a dock, ticking on the event loop's clock (so in virtual time, as fast as the
+CPU allows). Obstacles are boxes; the robot cannot enter them (it is pushed
+back out, its wheels slipping); its front bumper presses on contact, its IR
+rangefinders measure the distance to the boxes, and it is ``docked`` when its
+charging contacts lie on the dock's pad. No physics beyond that: commands take
+effect at once, odometry integrates the commanded speeds exactly.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import UnknownFrameError
+from ..motion import Controllers, WorldBase
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Collection, Iterable
+
+    from numpy.typing import NDArray
+
+    from ..motion import Pose2D
+
+RADIUS = 0.171
+"""Metres: the robot's radius; its charging contacts are this far behind its centre."""
+IR_RANGE = 0.4
+"""Metres: an IR rangefinder's reading when it sees nothing closer."""
+IR_SENSORS = {
+    "ir_side_left": 65.0,
+    "ir_left": 40.0,
+    "ir_front_left": 20.0,
+    "ir_front_center_left": 5.0,
+    "ir_front_center_right": -5.0,
+    "ir_front_right": -20.0,
+    "ir_right": -45.0,
+}
+"""The IR rangefinders and their bearings (degrees, from straight ahead), as on the simulator."""
+CLIFF_SENSORS = ("cliff_front_left", "cliff_front_right", "cliff_side_left", "cliff_side_right")
+"""The cliff sensors; the fake floor has no cliff, so they read False."""
+_IR_RADIUS = 0.165
+_IR_BEARINGS = [(key, math.radians(degrees)) for key, degrees in IR_SENSORS.items()]
+_CONTACT = 1e-6  # metres: closer than this to a box counts as touching it
+_BUMPER_SIDE = 0.25  # radians: a hit this close to straight ahead presses both sides
+_DOCK_PAD = (0.012, 0.04)  # half-extents of the pad the charging contacts must lie on
+_DOCK_BLOCK = (0.05, 0.15)  # half-extents of the dock, behind its face
+
+
+class Box:
+    """A rectangular obstacle: centre ``(x, y)``, heading ``yaw``, half-extents ``hx``, ``hy``."""
+
+    __slots__ = ("_c", "_s", "hx", "hy", "x", "y", "yaw")
+
+    def __init__(self, x: float, y: float, yaw: float, hx: float, hy: float) -> None:
+        self.x, self.y, self.yaw, self.hx, self.hy = x, y, yaw, hx, hy
+        self._c, self._s = math.cos(yaw), math.sin(yaw)
+
+    def __repr__(self) -> str:
+        return f"Box(x={self.x}, y={self.y}, yaw={self.yaw}, hx={self.hx}, hy={self.hy})"
+
+    def local(self, px: float, py: float) -> tuple[float, float]:
+        """The point ``(px, py)`` of the map in the box's own frame."""
+        c, s = self._c, self._s
+        dx, dy = px - self.x, py - self.y
+        return c * dx + s * dy, -s * dx + c * dy
+
+    def nearest(self, px: float, py: float) -> tuple[float, float]:
+        """The point of the box nearest to ``(px, py)``, in the map."""
+        lx, ly = self.local(px, py)
+        cx, cy = min(max(lx, -self.hx), self.hx), min(max(ly, -self.hy), self.hy)
+        c, s = self._c, self._s
+        return self.x + c * cx - s * cy, self.y + s * cx + c * cy
+
+    def ray(self, px: float, py: float, angle: float) -> float:
+        """How far a ray from ``(px, py)`` at ``angle`` goes to meet the box (inf: never)."""
+        lx, ly = self.local(px, py)
+        dx, dy = math.cos(angle - self.yaw), math.sin(angle - self.yaw)
+        near, far = 0.0, math.inf
+        for origin, direction, half in ((lx, dx, self.hx), (ly, dy, self.hy)):
+            if abs(direction) < 1e-12:
+                if abs(origin) > half:
+                    return math.inf
+                continue
+            t1, t2 = sorted(((-half - origin) / direction, (half - origin) / direction))
+            near, far = max(near, t1), min(far, t2)
+        return near if near <= far else math.inf
+
+
+def _room(xmin: float, ymin: float, xmax: float, ymax: float) -> list[Box]:
+    """The four walls (50 mm thick) around the interior ``[xmin, xmax] x [ymin, ymax]``."""
+    cx, cy, hx, hy, t = (
+        (xmin + xmax) / 2,
+        (ymin + ymax) / 2,
+        (xmax - xmin) / 2,
+        (ymax - ymin) / 2,
+        0.025,
+    )
+    return [
+        Box(cx, ymax + t, 0.0, hx + 2 * t, t),
+        Box(cx, ymin - t, 0.0, hx + 2 * t, t),
+        Box(xmax + t, cy, 0.0, t, hy + 2 * t),
+        Box(xmin - t, cy, 0.0, t, hy + 2 * t),
+    ]
+
+
+def _finite(name: str, values: tuple[float, ...]) -> tuple[float, ...]:
+    if not all(isinstance(v, int | float) and math.isfinite(v) for v in values):
+        msg = f"{name} must be finite numbers, got {values!r}"
+        raise ValueError(msg)
+    return tuple(float(v) for v in values)
+
+
+def _bounds(name: str, box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    xmin, ymin, xmax, ymax = _finite(name, box)
+    if not (xmin < xmax and ymin < ymax):
+        msg = (
+            f"{name} must be (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax, got {box!r}"
+        )
+        raise ValueError(msg)
+    return xmin, ymin, xmax, ymax
+
+
+def _planar(x: float, y: float, yaw: float) -> NDArray[np.float64]:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+class FakeWorld:
+    """The fake robot's world: its true pose, odometry, command, and the boxes around it.
+
+    Args:
+        room: The interior of the walls, ``(xmin, ymin, xmax, ymax)``.
+        dock: The dock's frame ``(x, y, yaw)`` in the map: on the floor at the
+            middle of its face, x pointing into the room.
+        obstacles: More boxes, each ``(xmin, ymin, xmax, ymax)``.
+        start: Where the robot starts, ``(x, y, yaw)``; by default on the dock.
+
+    Example:
+        >>> world = FakeWorld()
+        >>> world.set_command(0.2, 0.0)
+        >>> world.step(1.0)
+        >>> [round(value, 3) for value in world.base_pose()]
+        [-1.527, 0.0, 0.0]
+    """
+
+    def __init__(
+        self,
+        *,
+        room: tuple[float, float, float, float] = (-2.0, -2.0, 2.0, 2.0),
+        dock: Pose2D = (-1.9, 0.0, 0.0),
+        obstacles: Iterable[tuple[float, float, float, float]] = (),
+        start: Pose2D | None = None,
+    ) -> None:
+        room = _bounds("room", room)
+        obstacles = [_bounds("an obstacle", box) for box in obstacles]
+        dx, dy, dyaw = _finite("dock", dock)
+        depth, width = _DOCK_BLOCK
+        behind = (dx - depth * math.cos(dyaw), dy - depth * math.sin(dyaw))
+        self.dock = dock
+        self.boxes = [*_room(*room), Box(*behind, dyaw, depth, width)]
+        self.boxes += [
+            Box((a + c) / 2, (b + d) / 2, 0.0, (c - a) / 2, (d - b) / 2) for a, b, c, d in obstacles
+        ]
+        home = start or (
+            dx + (RADIUS + 0.002) * math.cos(dyaw),
+            dy + (RADIUS + 0.002) * math.sin(dyaw),
+            dyaw,
+        )
+        self.command: tuple[float, float] = (0.0, 0.0)
+        self.place(*home)
+
+    def place(self, x: float, y: float, yaw: float) -> None:
+        """Put the robot at ``(x, y, yaw)`` in the map; odometry restarts there.
+
+        Raises:
+            ValueError: Not finite numbers, or the robot would overlap a box.
+        """
+        x, y, yaw = _finite("the pose", (x, y, yaw))
+        for box in self.boxes:
+            nx, ny = box.nearest(x, y)
+            if math.hypot(x - nx, y - ny) < RADIUS:
+                msg = (
+                    f"the robot (radius {RADIUS} m) at ({x}, {y}) would overlap {box}; "
+                    "place it where it is clear"
+                )
+                raise ValueError(msg)
+        self._pose = (x, y, yaw)
+        self._odom = (0.0, 0.0, 0.0)
+
+    def set_command(self, v: float, w: float) -> None:
+        """Drive at ``v`` (m/s) and ``w`` (rad/s) from the next step on."""
+        self.command = (v, w)
+
+    def base_pose(self) -> Pose2D:
+        """The robot's true pose ``(x, y, yaw)`` in the map."""
+        return self._pose
+
+    def odom_pose(self) -> Pose2D:
+        """The pose dead-reckoned from the commanded speeds, in the ``odom`` frame."""
+        return self._odom
+
+    def step(self, dt: float) -> None:
+        """Move for ``dt`` seconds at the command; the boxes push the robot back out."""
+        v, w = self.command
+        self._odom = _arc(self._odom, v * dt, w * dt)
+        x, y, yaw = _arc(self._pose, v * dt, w * dt)
+        for box in self.boxes:
+            nx, ny = box.nearest(x, y)
+            gap = math.hypot(x - nx, y - ny)
+            if 0.0 < gap < RADIUS:
+                x, y = nx + (x - nx) * RADIUS / gap, ny + (y - ny) * RADIUS / gap
+        self._pose = (x, y, yaw)
+
+    def read_sensors(self) -> dict[str, object]:
+        """Every reading, keyed as in ``robot.state`` (the keys of `DriveBase`)."""
+        x, y, yaw = self._pose
+        left = right = False
+        seen = []  # the boxes an IR ray may reach
+        for box in self.boxes:
+            nx, ny = box.nearest(x, y)
+            gap = math.hypot(x - nx, y - ny)
+            if gap <= RADIUS + _CONTACT:
+                bearing = math.remainder(math.atan2(ny - y, nx - x) - yaw, math.tau)
+                left |= -_BUMPER_SIDE < bearing <= math.pi / 2
+                right |= -math.pi / 2 <= bearing < _BUMPER_SIDE
+            if gap < _IR_RADIUS + IR_RANGE:
+                seen.append(box)
+        state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
+        state["bumper_right"] = right
+        for key, bearing in _IR_BEARINGS:
+            angle = yaw + bearing
+            ox, oy = x + _IR_RADIUS * math.cos(angle), y + _IR_RADIUS * math.sin(angle)
+            state[key] = min([IR_RANGE, *(box.ray(ox, oy, angle) for box in seen)])
+        state.update(dict.fromkeys(CLIFF_SENSORS, False))
+        state["docked"] = self._docked()
+        state["v"], state["w"] = self.command
+        return state
+
+    def frame_transform(self, frame: str) -> NDArray[np.float64]:
+        """The 4x4 transform from ``frame`` (``odom``, ``base_link``, ``dock``) to ``map``."""
+        if frame == "base_link":
+            return _planar(*self._pose)
+        if frame == "odom":  # placed so that base_link seen from odom is the odometry (REP 105)
+            return _planar(*self._pose) @ np.linalg.inv(_planar(*self._odom))
+        if frame == "dock":
+            return _planar(*self.dock)
+        msg = f"unknown frame {frame!r}; known frames: {sorted(FakeFrames.FRAMES)}"
+        raise UnknownFrameError(msg)
+
+    def _docked(self) -> bool:
+        x, y, yaw = self._pose
+        dx, dy, dyaw = self.dock
+        px, py = x - RADIUS * math.cos(yaw) - dx, y - RADIUS * math.sin(yaw) - dy
+        c, s = math.cos(dyaw), math.sin(dyaw)
+        return abs(c * px + s * py) <= _DOCK_PAD[0] and abs(-s * px + c * py) <= _DOCK_PAD[1]
+
+
+def _arc(pose: Pose2D, distance: float, turn: float) -> Pose2D:
+    """``pose`` moved ``distance`` along a circular arc turning by ``turn``."""
+    x, y, yaw = pose
+    chord = distance if abs(turn) < 1e-12 else 2 * distance / turn * math.sin(turn / 2)
+    heading = yaw + turn / 2
+    return (
+        x + chord * math.cos(heading),
+        y + chord * math.sin(heading),
+        math.remainder(yaw + turn, math.tau),
+    )
+
+
+class FakeFrames:
+    """The `FrameProvider` of a `FakeWorld`: ``odom``, ``base_link`` and ``dock``."""
+
+    FRAMES = ("odom", "base_link", "dock")
+
+    def __init__(self, world: FakeWorld) -> None:
+        self._world = world
+
+    def get_transform(self, frame: str) -> NDArray[np.float64]:
+        """The 4x4 transform from ``frame`` to ``map``."""
+        return self._world.frame_transform(frame)
+
+    def frames(self) -> Collection[str]:
+        """The frames a `FakeWorld` places."""
+        return self.FRAMES
+
+
+class FakeBase(WorldBase):
+    """A `DriveBase` in memory: the motion actions and the random walk, with no simulator.
+
+    The robot (round, 0.171 m radius) starts on its dock in a 4 m x 4 m walled
+    room (interior ``[-2, 2] x [-2, 2]``, the dock against the middle of the
+    west wall), as the simulated robot does. Each control tick (``1 /
+    control_rate`` of the loop's clock) it moves by the command, then
+    publishes ``bumper``, ``bumper_left``, ``bumper_right``, the seven
+    ``ir_<position>`` ranges, four ``cliff_<position>`` (False), ``docked``,
+    ``v`` and ``w``, and runs the motion controllers. ``robot.world`` (a
+    `FakeWorld`) holds the truth and lets a test ``place`` the robot. In
+    virtual time (``pyrobots_aio.sim.run``, ``@pytest.mark.virtual_time``) a
+    minute of driving takes milliseconds; on an ordinary loop, a minute.
+
+    Args:
+        control_rate: Control ticks per second.
+        room: The interior of the walls, ``(xmin, ymin, xmax, ymax)``.
+        dock: The dock's frame ``(x, y, yaw)`` in the map.
+        obstacles: Boxes ``(xmin, ymin, xmax, ymax)`` in the room.
+        start: The start pose ``(x, y, yaw)``; by default on the dock.
+        **options: `Robot` options (``max_actions``, ``instruments`` ...).
+
+    Example:
+        >>> from pyrobots_aio.sim import run
+        >>> from pyrobots_aio.sim.random_walk import random_walk
+        >>> async def main() -> tuple[int, bool]:
+        ...     async with FakeBase() as robot:
+        ...         report = await random_walk(robot, moves=3, seed=1)
+        ...         return report.moves, robot.state.docked
+        >>> run(main)
+        (3, True)
+    """
+
+    def __init__(
+        self,
+        *,
+        control_rate: float = 50.0,
+        room: tuple[float, float, float, float] = (-2.0, -2.0, 2.0, 2.0),
+        dock: Pose2D = (-1.9, 0.0, 0.0),
+        obstacles: Iterable[tuple[float, float, float, float]] = (),
+        start: Pose2D | None = None,
+        **options: Any,
+    ) -> None:
+        if isinstance(control_rate, bool) or not (
+            isinstance(control_rate, int | float) and 0 < control_rate < math.inf
+        ):
+            msg = (
+                f"control_rate must be a positive number of ticks per second, got {control_rate!r}"
+            )
+            raise ValueError(msg)
+        super().__init__(**options)
+        self.world: FakeWorld = FakeWorld(room=room, dock=dock, obstacles=obstacles, start=start)
+        self.ticks = 0
+        self._period = 1.0 / control_rate
+        self._controllers = Controllers()
+        self._timer: asyncio.TimerHandle | None = None
+        self._start_time = 0.0
+        self.poses.add_frame_provider(FakeFrames(self.world))
+
+    # -- the DriveBase seam (velocity, odometry and map pose: the world's) --
+
+    @property
+    def control_period(self) -> float:
+        """Seconds between control ticks (``1 / control_rate``)."""
+        return self._period
+
+    async def control(self, step: Callable[[], bool]) -> None:
+        """Call ``step()`` after every control tick until it returns True."""
+        await self._controllers.control(step)
+
+    # -- ticking ----------------------------------------------------------
+
+    async def _start(self) -> None:
+        await super()._start()
+        loop = asyncio.get_running_loop()
+        self.state.update(self.world.read_sensors())
+        self.ticks, self._start_time = 0, loop.time()
+        self._timer = loop.call_at(self._start_time + self._period, self._tick, loop)
+
+    async def _stop(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self.stop()
+        self._controllers.cancel()
+        await super()._stop()
+
+    def _tick(self, loop: asyncio.AbstractEventLoop) -> None:
+        self.ticks += 1
+        self._timer = loop.call_at(
+            self._start_time + (self.ticks + 1) * self._period, self._tick, loop
+        )
+        self.world.step(self._period)
+        self.state.update(self.world.read_sensors())
+        self._controllers.run()

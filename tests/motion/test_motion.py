@@ -1,0 +1,180 @@
+"""The motion layer on every base: the same tests for SimRobot, FakeBase (and more to come)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import TYPE_CHECKING, Any
+
+import pytest
+
+from pyrobots_aio import ActionInterrupted, DriveBase, Outcome
+from pyrobots_aio.motion import WHEELS
+from pyrobots_aio.sim.random_walk import random_walk
+from pyrobots_aio.testing import EventLog
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from pyrobots_aio.actions import ActionHandle
+
+    from .conftest import Base
+
+pytestmark = [pytest.mark.asyncio, pytest.mark.virtual_time]
+
+KEYS = {"bumper", "bumper_left", "bumper_right", "docked", "v", "w"}
+
+
+async def test_starts_docked_with_the_state_keys_and_frames_of_a_base(base: Base) -> None:
+    async with base.make() as robot:
+        assert isinstance(robot, DriveBase)
+        assert robot.state.docked is True
+        assert set(robot.state) >= KEYS
+        ir = [key for key in robot.state if key.startswith("ir_")]
+        assert 5 <= len(ir) <= 7
+        assert all(0 < robot.state[key] <= 0.4 for key in ir)
+        assert [key for key in robot.state if key.startswith("cliff_")]
+        assert not any(robot.state[key] for key in robot.state if key.startswith("cliff_"))
+        assert {"odom", "base_link", "dock"} <= robot.poses.frames()
+        version = robot.state.version("v")
+        await robot.sleep(1.0)
+        assert robot.state.version("v") == version + round(1.0 / robot.control_period)
+
+
+async def test_odom_and_map_poses_agree_with_the_frames(base: Base) -> None:
+    async with base.make() as robot:
+        await robot.undock()
+        await robot.rotate_angle(1.0)
+        await robot.drive_distance(0.3)
+        seen = robot.poses.inframe("base_link", "odom")
+        x, y, yaw = robot.odom_pose()
+        assert (seen.x, seen.y) == (pytest.approx(x, abs=1e-9), pytest.approx(y, abs=1e-9))
+        assert robot.poses.euler(seen)[2] == pytest.approx(yaw, abs=1e-9)
+        me = robot.poses.myself()
+        x, y, yaw = robot.map_pose()
+        assert (me.x, me.y) == (pytest.approx(x, abs=1e-9), pytest.approx(y, abs=1e-9))
+        assert robot.poses.euler(me)[2] == pytest.approx(yaw, abs=1e-9)
+
+
+async def test_drive_distance_and_rotate_angle_reach_their_targets(base: Base) -> None:
+    async with base.make() as robot:
+        await robot.undock()
+        x0, y0, _ = base.truth(robot)
+        done = await robot.drive_distance(0.8)
+        assert done == pytest.approx(0.8, abs=0.003)
+        x1, y1, _ = base.truth(robot)
+        assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(0.8, abs=0.01)
+        turned = await robot.rotate_angle(-math.pi / 2)
+        assert turned == pytest.approx(-math.pi / 2, abs=0.006)
+        back = await robot.drive_distance(-0.3)
+        assert back == pytest.approx(-0.3, abs=0.003)
+        await robot.sleep(0.1)  # the wheels were stopped; the next ticks publish it
+        assert robot.state.v == pytest.approx(0.0, abs=0.01)
+
+
+async def test_navigate_to_a_map_pose_and_back_to_the_dock(base: Base) -> None:
+    async with base.make() as robot:
+        await robot.undock()
+        await robot.navigate_to((0.0, 0.5, 0.0, 0.0, 0.0, math.pi / 2))
+        x, y, yaw = base.truth(robot)
+        assert (x, y) == (pytest.approx(0.0, abs=0.02), pytest.approx(0.5, abs=0.02))
+        assert yaw == pytest.approx(math.pi / 2, abs=0.01)
+        assert not robot.state.docked
+        await robot.dock()
+        assert robot.state.docked
+        assert robot.state.bumper is False
+
+
+async def test_driving_into_a_wall_presses_the_bumper_and_lowers_ir(base: Base) -> None:
+    async with base.make() as robot:
+        await robot.undock()
+        readings = []
+        robot.drive(0.25, 0.0)
+        while not robot.state.bumper:
+            await robot.sleep(0.1)
+            readings.append(robot.state.ir_front_center_left)
+            assert robot.time() < 30, "never reached the east wall"
+        robot.stop()
+        assert robot.state.bumper_left
+        assert robot.state.bumper_right
+        seen = [r for r in readings if r < 0.4]
+        assert len(seen) >= 5
+        assert all(later <= earlier + 0.01 for earlier, later in itertools.pairwise(seen))
+        assert seen[-1] < 0.1
+        assert base.truth(robot)[0] > 1.7
+
+
+async def _moving(robot: DriveBase) -> None:
+    await robot.sleep(0.5)
+    assert robot.resources.owner(WHEELS) is not None
+    assert (robot.state.v, robot.state.w) != (0.0, 0.0)
+
+
+MOTIONS: dict[str, Callable[[DriveBase], ActionHandle[Any]]] = {
+    "drive_distance": lambda robot: robot.drive_distance(2.0),
+    "navigate_to": lambda robot: robot.navigate_to((1.0, 0.5, 0.0, 0.0, 0.0, 0.0)),
+    "rotate_angle": lambda robot: robot.rotate_angle(3.0),
+    "dock": lambda robot: robot.dock(),
+    "undock": lambda robot: robot.undock(),
+}
+
+
+@pytest.mark.parametrize("name", sorted(MOTIONS))
+async def test_cancelling_any_motion_stops_the_wheels_and_releases_them(
+    base: Base, name: str
+) -> None:
+    async with base.make() as robot:
+        if name != "undock":
+            await robot.undock()
+            await robot.drive_distance(0.5)
+        handle = MOTIONS[name](robot)
+        await _moving(robot)
+        handle.cancel("stop now")
+        with pytest.raises(ActionInterrupted, match="stop now"):
+            await handle
+        assert robot.resources.owner(WHEELS) is None
+        await robot.sleep(0.5)
+        assert robot.state.v == pytest.approx(0.0, abs=0.005)
+        assert robot.state.w == pytest.approx(0.0, abs=0.01)
+        assert handle.outcome is Outcome.CANCELLED
+
+
+async def test_drive_and_stop_command_the_wheels_without_locking_them(base: Base) -> None:
+    async with base.make() as robot:
+        robot.drive(0.1, 0.0)
+        await robot.sleep(1.0)
+        assert robot.state.v == pytest.approx(0.1, abs=0.01)
+        assert not robot.state.docked
+        assert robot.resources.owner(WHEELS) is None
+        robot.stop()
+        await robot.sleep(0.5)
+        assert robot.state.v == pytest.approx(0.0, abs=0.005)
+
+
+async def test_bad_motion_arguments_are_refused(base: Base) -> None:
+    async with base.make() as robot:
+        with pytest.raises(ValueError, match=r"^v must be a finite number, got nan$"):
+            robot.drive(math.nan, 0.0)
+        with pytest.raises(ValueError, match=r"^w must be a finite number, got '1'$"):
+            robot.drive(0.0, "1")  # type: ignore[arg-type]
+        with pytest.raises(ValueError, match=r"^speed must be positive, got -1$"):
+            await robot.drive_distance(1.0, speed=-1)
+        with pytest.raises(ValueError, match=r"^angle must be a finite number, got inf$"):
+            await robot.rotate_angle(math.inf)
+        await robot.sleep(0.1)
+        assert robot.state.docked  # nothing moved
+        assert abs(robot.state.v) < 1e-9
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+async def test_the_random_walk_handles_every_bump_and_docks(base: Base, seed: int) -> None:
+    log = EventLog()
+    async with base.make(instruments=[log]) as robot:
+        report = await random_walk(robot, seed=seed)
+        assert not robot.state.bumper
+        assert robot.state.docked
+        assert robot.handles() == []
+    assert (report.moves, report.docked) == (10, True)
+    assert report.sim_time < 150
+    assert set(log.outcomes("bumper_reflex")) <= {"succeeded"}
+    assert len(log.outcomes("bumper_reflex")) <= report.bumps
