@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import difflib
+import itertools
 import reprlib
 import time
 from collections.abc import Mapping
@@ -33,6 +34,8 @@ if TYPE_CHECKING:
 _SHOWN_KEYS = 8  # keys listed in an unknown-key message; the others are counted
 _repr = reprlib.Repr()
 _repr.maxdict = 4
+_plus_one = (1).__add__
+_ZEROS = itertools.repeat(0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,14 +166,14 @@ class StateStore(Mapping[str, Any]):
 
     def timestamp(self, key: str) -> float:
         """Return when ``key`` was last written, on the store's clock."""
-        return self.sample(key).timestamp
+        return self._stamp_or_version(self._stamps, key)
 
     def version(self, key: str | None = None) -> int:
         """Return how many times ``key`` was written, or the store's version when None.
 
         The store's version counts write operations: a batch `update` is one.
         """
-        return self._version if key is None else self.sample(key).version
+        return self._version if key is None else self._stamp_or_version(self._versions, key)
 
     def require(self, *keys: str) -> None:
         """Raise `UnknownStateKeyError`, closest keys in the message, for the first missing key.
@@ -247,14 +250,20 @@ class StateStore(Mapping[str, Any]):
             ({'bumper_left': False, 'bumper_right': True}, 1)
         """
         changes: dict[str, Any] = {} if mapping is None else dict(mapping)
-        changes.update(values)
+        if values:
+            changes.update(values)
         if not changes:
             return
-        for key in changes:
-            check_key(key)
+        if not changes.keys() <= self._values.keys():  # known keys are strings already
+            for key in changes:
+                check_key(key)
         now = self._clock()
-        for key, value in changes.items():
-            self._commit(key, value, now)
+        # A backend writes a couple of dozen keys every tick: commit them without a
+        # Python-level loop (the versions too: ``version + 1`` per key, mapped in C).
+        self._values.update(changes)
+        self._stamps.update(dict.fromkeys(changes, now))
+        versions = self._versions
+        versions.update(zip(changes, map(_plus_one, map(versions.get, changes, _ZEROS))))
         self._version += 1
         self._subscribers.notify_batch(changes)
 
@@ -308,6 +317,16 @@ class StateStore(Mapping[str, Any]):
         return self._subscribers.add(callback, keys)
 
     # -- helpers ----------------------------------------------------------------
+
+    def _stamp_or_version(self, table: dict[str, Any], key: str) -> Any:
+        # What `sample` gives, without building one (recorders ask on every write).
+        log = READS.get()
+        if log is not None:
+            log.record(self, key)
+        try:
+            return table[key]
+        except KeyError:
+            raise self._unknown(key) from None
 
     def _commit(self, key: str, value: Any, now: float) -> None:
         self._values[key] = value
