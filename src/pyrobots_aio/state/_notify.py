@@ -130,15 +130,14 @@ class SubscriberIndex:
         if subs:
             self._run([(subs, MappingProxyType({key: value}))])
 
-    def notify_batch(self, changes: dict[str, Any]) -> None:
-        """Tell each subscriber, once, the written keys it watches."""
-        deliveries: list[_Delivery] = []
-        if self._every:
-            deliveries.append((self._every, MappingProxyType(changes)))
-        keys = tuple(changes)
+    def notify_batch(self, changes: dict[str, Any], keys: tuple[str, ...]) -> None:
+        """Tell each subscriber, once, the written keys it watches (``keys = tuple(changes)``)."""
         routes = self._routes.get(keys)
         if routes is None:
             routes = self._route(keys)
+        deliveries: list[_Delivery] = []
+        if self._every:
+            deliveries.append((self._every, MappingProxyType(changes)))
         for sub, watched in routes:
             mine = {key: changes[key] for key in watched}
             deliveries.append(((sub,), MappingProxyType(mine)))

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import difflib
-import itertools
 import reprlib
 import time
 from collections.abc import Mapping
@@ -23,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from pyrobots_aio._exceptions import UnknownStateKeyError
 
 from ._filter import MovingAverage
+from ._ledger import WriteLedger
 from ._notify import SubscriberIndex, Subscription, check_key
 from ._reads import READS, tracking
 
@@ -34,8 +34,6 @@ if TYPE_CHECKING:
 _SHOWN_KEYS = 8  # keys listed in an unknown-key message; the others are counted
 _repr = reprlib.Repr()
 _repr.maxdict = 4
-_plus_one = (1).__add__
-_ZEROS = itertools.repeat(0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,11 +91,10 @@ class StateStore(Mapping[str, Any]):
 
     __slots__ = (
         "_clock",
-        "_stamps",
+        "_ledger",
         "_subscribers",
         "_values",
         "_version",
-        "_versions",
         "_windows",
     )
 
@@ -116,8 +113,7 @@ class StateStore(Mapping[str, Any]):
         """
         self._clock = clock or _loop_time
         self._values: dict[str, Any] = {}
-        self._stamps: dict[str, float] = {}
-        self._versions: dict[str, int] = {}
+        self._ledger = WriteLedger()
         self._version = 0
         self._subscribers = SubscriberIndex()
         self._windows: dict[str, MovingAverage] = {}
@@ -162,18 +158,27 @@ class StateStore(Mapping[str, Any]):
     def sample(self, key: str) -> StateSample:
         """Return the value of ``key`` with its timestamp and version."""
         value = self[key]
-        return StateSample(value, self._stamps[key], self._versions[key])
+        return StateSample(value, self._ledger.stamp(key), self._ledger.version(key))
 
     def timestamp(self, key: str) -> float:
         """Return when ``key`` was last written, on the store's clock."""
-        return self._stamp_or_version(self._stamps, key)
+        # Recorders ask on every write of the keys they sample: no StateSample, no helper.
+        log = READS.get()
+        if log is not None:
+            log.record(self, key)
+        try:
+            return self._ledger.stamp(key)
+        except KeyError:
+            raise self._unknown(key) from None
 
     def version(self, key: str | None = None) -> int:
         """Return how many times ``key`` was written, or the store's version when None.
 
         The store's version counts write operations: a batch `update` is one.
         """
-        return self._version if key is None else self._stamp_or_version(self._versions, key)
+        if key is None:
+            return self._version
+        return self.sample(key).version
 
     def require(self, *keys: str) -> None:
         """Raise `UnknownStateKeyError`, closest keys in the message, for the first missing key.
@@ -207,7 +212,9 @@ class StateStore(Mapping[str, Any]):
     def set(self, key: str, value: Any) -> None:
         """Write ``value`` under ``key`` and notify its subscribers."""
         check_key(key)
-        self._commit(key, value, self._clock())
+        now = self._clock()
+        self._values[key] = value
+        self._ledger.write(key, now)
         self._version += 1
         self._subscribers.notify(key, value)
 
@@ -258,14 +265,11 @@ class StateStore(Mapping[str, Any]):
             for key in changes:
                 check_key(key)
         now = self._clock()
-        # A backend writes a couple of dozen keys every tick: commit them without a
-        # Python-level loop (the versions too: ``version + 1`` per key, mapped in C).
+        keys = tuple(changes)
         self._values.update(changes)
-        self._stamps.update(dict.fromkeys(changes, now))
-        versions = self._versions
-        versions.update(zip(changes, map(_plus_one, map(versions.get, changes, _ZEROS))))
+        self._ledger.write_batch(keys, now)  # O(1) for a key sequence written before
         self._version += 1
-        self._subscribers.notify_batch(changes)
+        self._subscribers.notify_batch(changes, keys)
 
     def filtered(self, name: str, value: float, window: int = 10) -> float:
         """Add ``value`` to the moving window ``name`` and return the window's mean.
@@ -317,21 +321,6 @@ class StateStore(Mapping[str, Any]):
         return self._subscribers.add(callback, keys)
 
     # -- helpers ----------------------------------------------------------------
-
-    def _stamp_or_version(self, table: dict[str, Any], key: str) -> Any:
-        # What `sample` gives, without building one (recorders ask on every write).
-        log = READS.get()
-        if log is not None:
-            log.record(self, key)
-        try:
-            return table[key]
-        except KeyError:
-            raise self._unknown(key) from None
-
-    def _commit(self, key: str, value: Any, now: float) -> None:
-        self._values[key] = value
-        self._stamps[key] = now
-        self._versions[key] = self._versions.get(key, 0) + 1
 
     def _unknown(self, key: object) -> UnknownStateKeyError:
         known = sorted(self._values)
