@@ -385,6 +385,22 @@ def test_a_failing_subscriber_is_logged_and_the_others_still_run(
     assert str(record.exc_info[1]) == "subscriber bug"
 
 
+def test_writing_an_unchanged_value_is_a_write() -> None:
+    # Not skipped as "no change": a level condition with max_firing_freq=0 fires on every
+    # write that finds it true, and versions and timestamps count writes (DESIGN.md §5).
+    now = [0.0]
+    store = StateStore({"bumper": True, "v": 0.0}, clock=lambda: now[0])
+    seen = Recorder()
+    store.subscribe(seen, "bumper")
+    for tick in range(1, 4):
+        now[0] = tick / 50
+        store.update(bumper=True, v=0.0)
+    store.bumper = True
+    assert seen.calls == [{"bumper": True}] * 4
+    assert store.sample("bumper") == StateSample(True, 0.06, 5)
+    assert store.sample("v") == StateSample(0.0, 0.06, 4)
+
+
 def test_the_same_batch_written_again_reaches_the_subscribers_of_the_moment() -> None:
     # A backend writes the same key sequence every tick; who hears it changes in between.
     store = _store(a=0, b=0, c=0)
