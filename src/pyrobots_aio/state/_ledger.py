@@ -7,10 +7,17 @@ counts its key sequence once (a `_Batch`), and a read of one key combines the
 batches holding it with what single writes recorded. A key's version is the
 number of writes of it, whichever way; its timestamp is that of its latest
 write, found by write order. Past `_BATCHES_KEPT` distinct key sequences, the
-batches are folded into the per-key tables.
+batches are folded into the per-key tables. The keys of the latest write are
+answered first, without a look-up: a recorder sampling the keys being written
+asks right away.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from collections.abc import Container
 
 __all__ = ["WriteLedger"]
 
@@ -35,12 +42,21 @@ class WriteLedger:
     Example:
         >>> ledger = WriteLedger()
         >>> ledger.write("v", 1.0)
-        >>> ledger.write_batch(("v", "w"), 2.0)
+        >>> ledger.write_batch(("v", "w"), 2.0, {"v", "w"})
         >>> ledger.stamp("v"), ledger.version("v"), ledger.version("w")
         (2.0, 2, 1)
     """
 
-    __slots__ = ("_batches", "_by_key", "_orders", "_stamps", "_versions", "_writes")
+    __slots__ = (
+        "_batches",
+        "_by_key",
+        "_latest_keys",
+        "_latest_stamp",
+        "_orders",
+        "_stamps",
+        "_versions",
+        "_writes",
+    )
 
     def __init__(self) -> None:
         self._writes = 0  # write operations so far: orders the writes
@@ -49,16 +65,23 @@ class WriteLedger:
         self._versions: dict[str, int] = {}
         self._batches: dict[tuple[str, ...], _Batch] = {}
         self._by_key: dict[str, tuple[_Batch, ...]] = {}
+        self._latest_keys: Container[str] = ()  # those of the latest write, and its stamp
+        self._latest_stamp = 0.0
 
     def write(self, key: str, now: float) -> None:
         """Record a write of ``key`` at ``now``."""
+        self._latest_keys, self._latest_stamp = (key,), now
         self._writes += 1
         self._stamps[key] = now
         self._orders[key] = self._writes
         self._versions[key] = self._versions.get(key, 0) + 1
 
-    def write_batch(self, keys: tuple[str, ...], now: float) -> None:
-        """Record one write of every key of ``keys`` (no key twice) at ``now``."""
+    def write_batch(self, keys: tuple[str, ...], now: float, written: Container[str]) -> None:
+        """Record one write of every key of ``keys`` (no key twice) at ``now``.
+
+        ``written`` holds the same keys, for a fast ``in`` (the dict written).
+        """
+        self._latest_keys, self._latest_stamp = written, now
         batch = self._batches.get(keys)
         if batch is None:
             batch = self._add(keys)
@@ -69,6 +92,8 @@ class WriteLedger:
 
     def stamp(self, key: str) -> float:
         """Return when ``key`` was last written; KeyError if never."""
+        if key in self._latest_keys:
+            return self._latest_stamp
         stamp = self._stamps.get(key)
         order = self._orders.get(key, 0)
         for batch in self._by_key.get(key, ()):

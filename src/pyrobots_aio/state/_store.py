@@ -267,7 +267,7 @@ class StateStore(Mapping[str, Any]):
         now = self._clock()
         keys = tuple(changes)
         self._values.update(changes)
-        self._ledger.write_batch(keys, now)  # O(1) for a key sequence written before
+        self._ledger.write_batch(keys, now, changes)  # O(1) for a sequence written before
         self._version += 1
         self._subscribers.notify_batch(changes, keys)
 
