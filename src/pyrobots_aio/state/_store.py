@@ -75,7 +75,10 @@ class StateStore(Mapping[str, Any]):
     and the store's version, then calls the key's subscribers synchronously
     with ``{key: value}``; `update` writes a batch as one write. Writes made
     by a subscriber are notified once the current notification is over, so
-    every subscriber sees the writes in the order they happened.
+    every subscriber sees the writes in the order they happened. Writing the
+    value a key already has is a write like any other (stamped, counted,
+    notified): a level condition with ``max_firing_freq=0`` fires on each
+    write that finds it true, and a recorder samples a value that held still.
 
     Not thread-safe: write it from the event loop's thread.
 
