@@ -328,18 +328,24 @@ class SimWorld:
         ``imu_acc_x``, ``imu_acc_y`` (m/s^2, body frame); ``battery`` (0 to 1).
         """
         layout, s = self._layout, self._readings
-        left = s[layout.bumpers[0]] > layout.bumper_threshold
-        right = s[layout.bumpers[1]] > layout.bumper_threshold
+        threshold = layout.bumper_threshold
+        left = s[layout.bumpers[0]] > threshold
+        right = s[layout.bumpers[1]] > threshold
         state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
         state["bumper_right"] = right
-        noise = self._ir_noise()
-        for (key, index, limit), error in zip(layout.ir, noise, strict=True):
+        for (key, index, limit), error in zip(layout.ir, self._ir_noise(), strict=True):
             distance = s[index]
-            seen = 0.0 <= distance < limit
-            state[key] = min(max(distance + error, 0.0), limit) if seen else limit
+            if 0.0 <= distance < limit:  # sees something: noisy, clamped to [0, limit]
+                # min(max(d, 0.0), limit) to the bit (-0.0 and NaN too), without the calls.
+                distance += error
+                distance = 0.0 if distance < 0.0 else distance
+                state[key] = limit if limit < distance else distance
+            else:
+                state[key] = limit
+        cliff = layout.cliff_threshold
         for key, index in layout.cliffs:
             distance = s[index]
-            state[key] = distance < 0.0 or distance > layout.cliff_threshold
+            state[key] = distance < 0.0 or distance > cliff
         state["docked"] = self._is_docked
         wheel_left, wheel_right = s[layout.wheel_vels[0]], s[layout.wheel_vels[1]]
         state["v"] = layout.wheel_radius * (wheel_left + wheel_right) / 2
