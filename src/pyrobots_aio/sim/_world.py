@@ -131,7 +131,7 @@ class SimWorld:
         self._layout = ModelLayout.from_model(mujoco, model, str(path))
         self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
         self._mujoco, self._model, self._data = mujoco, model, mujoco.MjData(model)
-        self._sensordata = self._data.sensordata  # a view, fetched once
+        self._sensordata, self._ctrl = self._data.sensordata, self._data.ctrl  # views, fetched once
         self._path, self._seed, self._dt = path, seed, physics_dt
         self._readings: list[float] = []  # sensordata of the current state, as floats
         self._is_docked = False  # of the current state
@@ -239,8 +239,8 @@ class SimWorld:
         if fastest > layout.max_wheel_speed:
             scale = layout.max_wheel_speed / fastest
             left, right, v, w = left * scale, right * scale, v * scale, w * scale
-        self._data.ctrl[layout.actuators[0]] = left
-        self._data.ctrl[layout.actuators[1]] = right
+        self._ctrl[layout.actuators[0]] = left
+        self._ctrl[layout.actuators[1]] = right
         self._command = (v, w)
 
     def stop(self) -> None:
