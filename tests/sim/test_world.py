@@ -161,6 +161,26 @@ def test_ir_reads_the_distance_to_the_wall(world: SimWorld) -> None:
     assert world.read_sensors()["ir_front_center_left"] == pytest.approx(expected, abs=0.01)
 
 
+def test_ir_noise_is_one_draw_per_sensor_per_reading_in_order() -> None:
+    # The world draws its IR noise in blocks; the readings must be those of one draw of
+    # len(ir) values per reading from the seeded generator, across block boundaries.
+    world = SimWorld(seed=5)
+    world.place(1.7, 0.0, 0.3)  # the east wall in range of most IR sensors
+    reference = np.random.default_rng(5)
+    sensors = world._layout.ir
+    seen = 0
+    for _ in range(600):
+        world.advance(TICK)
+        noise = reference.normal(0.0, world._layout.ir_noise, len(sensors)).tolist()
+        state = world.read_sensors()
+        for (key, index, limit), error in zip(sensors, noise, strict=True):
+            distance = world._readings[index]
+            in_range = 0.0 <= distance < limit
+            seen += in_range
+            assert state[key] == (min(max(distance + error, 0.0), limit) if in_range else limit)
+    assert seen > 600 * 3
+
+
 @pytest.mark.parametrize(("heading_deg", "side"), [(30.0, "bumper_right"), (-30.0, "bumper_left")])
 def test_angled_hit_presses_the_side_that_touches(
     world: SimWorld, heading_deg: float, side: str

@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import random
 import time
 from typing import TYPE_CHECKING, Any
 
@@ -231,6 +232,58 @@ def test_versions_count_writes_per_key_and_per_operation() -> None:
     assert (store.version("a"), store.version("b"), store.version()) == (4, 2, 4)
     with pytest.raises(UnknownStateKeyError):
         store.version("c")
+    with pytest.raises(UnknownStateKeyError):
+        store.timestamp("c")
+
+
+def test_versions_and_timestamps_follow_interleaved_single_and_batch_writes() -> None:
+    # Batches of a key sequence seen before are counted once per write, not per key:
+    # whichever way a key was written, its version counts every write and its
+    # timestamp is its latest write's.
+    now = [0.0]
+    store = StateStore(clock=lambda: now[0])
+    writes = {"a": 0, "b": 0, "c": 0}
+    stamps: dict[str, float] = {}
+    plan: list[dict[str, int]] = [{"a": 1, "b": 1}, {"b": 2}, {"a": 3, "b": 3}, {"c": 4}]
+    plan += [{"b": 5, "a": 5}, {"a": 6, "b": 6}, {"a": 7}, {"a": 8, "b": 8, "c": 8}]
+    for step, values in enumerate(plan * 3):
+        now[0] = float(step)
+        if len(values) == 1:
+            ((key, value),) = values.items()
+            store[key] = value
+        else:
+            store.update(values)
+        for key in values:
+            writes[key] += 1
+            stamps[key] = now[0]
+        for key in store:
+            assert store.sample(key) == StateSample(store[key], stamps[key], writes[key])
+            assert (store.timestamp(key), store.version(key)) == (stamps[key], writes[key])
+    assert store.version() == len(plan) * 3
+
+
+def test_versions_and_timestamps_stay_exact_over_many_key_sequences() -> None:
+    now = [0.0]
+    store = StateStore(clock=lambda: now[0])
+    keys = [f"k{i}" for i in range(12)]
+    writes = dict.fromkeys(keys, 0)
+    stamps = dict.fromkeys(keys, 0.0)
+    rng = random.Random(0)
+    sequences = list(dict.fromkeys(tuple(rng.sample(keys, rng.randint(2, 5))) for _ in range(110)))
+    sequences = sequences[:100]
+    assert len(sequences) == 100  # more than the store counts as a whole
+    for step in range(400):  # each sequence written a few times, in between the others
+        now[0] = step / 10
+        chosen = sequences[rng.randrange(100)] if step % 3 else sequences[step % 100]
+        store.update(dict.fromkeys(chosen, step))
+        if step % 7 == 0:
+            store.set(chosen[0], -step)
+        for key in (*chosen, chosen[0]) if step % 7 == 0 else chosen:
+            writes[key] += 1
+            stamps[key] = now[0]
+        if step % 50 == 49:
+            assert {key: store.version(key) for key in keys} == writes
+            assert {key: store.timestamp(key) for key in keys} == stamps
 
 
 # -- change notification ------------------------------------------------------------
@@ -330,6 +383,41 @@ def test_a_failing_subscriber_is_logged_and_the_others_still_run(
     assert record.getMessage() == f"state subscriber {failing!r} failed on a write of ['bumper']"
     assert record.exc_info is not None
     assert str(record.exc_info[1]) == "subscriber bug"
+
+
+def test_writing_an_unchanged_value_is_a_write() -> None:
+    # Not skipped as "no change": a level condition with max_firing_freq=0 fires on every
+    # write that finds it true, and versions and timestamps count writes (DESIGN.md §5).
+    now = [0.0]
+    store = StateStore({"bumper": True, "v": 0.0}, clock=lambda: now[0])
+    seen = Recorder()
+    store.subscribe(seen, "bumper")
+    for tick in range(1, 4):
+        now[0] = tick / 50
+        store.update(bumper=True, v=0.0)
+    store.bumper = True
+    assert seen.calls == [{"bumper": True}] * 4
+    assert store.sample("bumper") == StateSample(True, 0.06, 5)
+    assert store.sample("v") == StateSample(0.0, 0.06, 4)
+
+
+def test_the_same_batch_written_again_reaches_the_subscribers_of_the_moment() -> None:
+    # A backend writes the same key sequence every tick; who hears it changes in between.
+    store = _store(a=0, b=0, c=0)
+    first, late, every = Recorder(), Recorder(), Recorder()
+    early = store.subscribe(first, ["a", "c"])
+    store.update(a=1, b=1, c=1)
+    store.subscribe(late, "b")
+    store.update(a=2, b=2, c=2)
+    early.close()
+    watching_all = store.subscribe(every)
+    store.update(a=3, b=3, c=3)
+    watching_all.close()
+    store.update(a=4, b=4, c=4)
+    store.update(c=5, b=5, a=5)  # another order is another sequence
+    assert first.calls == [{"a": 1, "c": 1}, {"a": 2, "c": 2}]
+    assert late.calls == [{"b": 2}, {"b": 3}, {"b": 4}, {"b": 5}]
+    assert every.calls == [{"a": 3, "b": 3, "c": 3}]
 
 
 def test_unsubscribing_during_notification_takes_effect_at_once() -> None:

@@ -47,6 +47,7 @@ __all__ = ["SimWorld"]
 _log = logging.getLogger("pyrobots_aio.sim")
 
 _HOME_KEYFRAME = "home"
+_NOISE_BLOCK = 256  # sensor readings whose IR noise is drawn at once
 
 
 def _import_mujoco() -> ModuleType:
@@ -123,16 +124,21 @@ class SimWorld:
         path = Path(model_path) if model_path is not None else _default_model_path()
         model = _load(mujoco, path)
         model.opt.timestep = physics_dt
+        self._opt = model.opt  # a view of the model's options, fetched once (each fetch costs)
         self._sensors_off = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         # mj_step2 integrates as mj_step does, except RK4 (it falls back to Euler).
         self._split_step = model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4
         self._layout = ModelLayout.from_model(mujoco, model, str(path))
         self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
         self._mujoco, self._model, self._data = mujoco, model, mujoco.MjData(model)
+        self._sensordata, self._ctrl = self._data.sensordata, self._data.ctrl  # views, fetched once
         self._path, self._seed, self._dt = path, seed, physics_dt
         self._readings: list[float] = []  # sensordata of the current state, as floats
+        self._is_docked = False  # of the current state
         self._reset_to_home()
         self._rng = np.random.default_rng(seed)
+        self._noise: list[float] = []  # IR noise drawn ahead, consumed in order
+        self._noise_used = 0
         self._steps = 0
         self._clock_start = (0.0, 0)  # `time` reads this time at this step
         self._command = (0.0, 0.0)
@@ -233,8 +239,8 @@ class SimWorld:
         if fastest > layout.max_wheel_speed:
             scale = layout.max_wheel_speed / fastest
             left, right, v, w = left * scale, right * scale, v * scale, w * scale
-        self._data.ctrl[layout.actuators[0]] = left
-        self._data.ctrl[layout.actuators[1]] = right
+        self._ctrl[layout.actuators[0]] = left
+        self._ctrl[layout.actuators[1]] = right
         self._command = (v, w)
 
     def stop(self) -> None:
@@ -251,11 +257,11 @@ class SimWorld:
             raise ValueError(f"cannot step a negative number of physics steps ({n})")
         if n == 0:
             return
-        mujoco, model, data = self._mujoco, self._model, self._data
+        mujoco, model, data, opt = self._mujoco, self._model, self._data, self._opt
         # Sensors are read only after the last step: skip them in the steps (they never
         # feed back into the physics), then compute everything once for the new state.
-        flags = model.opt.disableflags
-        model.opt.disableflags = flags | self._sensors_off
+        flags = opt.disableflags
+        opt.disableflags = flags | self._sensors_off
         try:
             rest = n
             if self._split_step:
@@ -266,11 +272,11 @@ class SimWorld:
             if rest:
                 mujoco.mj_step(model, data, nstep=rest)
         finally:
-            model.opt.disableflags = flags
+            opt.disableflags = flags
         self._forward()
         self._steps += n
         self._odometry.update(*self._encoders())
-        self._update_battery(n * self._dt, self._readings)
+        self._update_battery(n * self._dt)
 
     def advance(self, dt: float) -> int:
         """Advance the physics by ``dt`` seconds and return the steps taken.
@@ -322,19 +328,25 @@ class SimWorld:
         ``imu_acc_x``, ``imu_acc_y`` (m/s^2, body frame); ``battery`` (0 to 1).
         """
         layout, s = self._layout, self._readings
-        left = s[layout.bumpers[0]] > layout.bumper_threshold
-        right = s[layout.bumpers[1]] > layout.bumper_threshold
+        threshold = layout.bumper_threshold
+        left = s[layout.bumpers[0]] > threshold
+        right = s[layout.bumpers[1]] > threshold
         state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
         state["bumper_right"] = right
-        noise = self._rng.normal(0.0, layout.ir_noise, len(layout.ir)).tolist()
-        for (key, index, limit), error in zip(layout.ir, noise, strict=True):
+        for (key, index, limit), error in zip(layout.ir, self._ir_noise(), strict=True):
             distance = s[index]
-            seen = 0.0 <= distance < limit
-            state[key] = min(max(distance + error, 0.0), limit) if seen else limit
+            if 0.0 <= distance < limit:  # sees something: noisy, clamped to [0, limit]
+                # min(max(d, 0.0), limit) to the bit (-0.0 and NaN too), without the calls.
+                distance += error
+                distance = 0.0 if distance < 0.0 else distance
+                state[key] = limit if limit < distance else distance
+            else:
+                state[key] = limit
+        cliff = layout.cliff_threshold
         for key, index in layout.cliffs:
             distance = s[index]
-            state[key] = distance < 0.0 or distance > layout.cliff_threshold
-        state["docked"] = self._docked(s)
+            state[key] = distance < 0.0 or distance > cliff
+        state["docked"] = self._is_docked
         wheel_left, wheel_right = s[layout.wheel_vels[0]], s[layout.wheel_vels[1]]
         state["v"] = layout.wheel_radius * (wheel_left + wheel_right) / 2
         state["w"] = layout.wheel_radius * (wheel_right - wheel_left) / layout.track
@@ -471,21 +483,35 @@ class SimWorld:
         mujoco.mj_checkPos(model, data)
         mujoco.mj_checkVel(model, data)
         mujoco.mj_forward(model, data)
-        self._readings = self._data.sensordata.tolist()
+        self._readings = s = self._sensordata.tolist()
+        start = self._layout.dock_contact
+        px, py, pz = s[start : start + 3]
+        hx, hy, hz = self._layout.dock_pad
+        self._is_docked = abs(px) <= hx and abs(py) <= hy and abs(pz) <= hz
 
     def _encoders(self) -> tuple[float, float]:
         left, right = self._layout.encoders
         return self._readings[left], self._readings[right]
 
-    def _docked(self, s: list[float]) -> bool:
-        start = self._layout.dock_contact
-        px, py, pz = s[start : start + 3]
-        hx, hy, hz = self._layout.dock_pad
-        return abs(px) <= hx and abs(py) <= hy and abs(pz) <= hz
+    def _ir_noise(self) -> list[float]:
+        """The next reading's IR noise: one value per IR sensor.
 
-    def _update_battery(self, elapsed: float, s: list[float]) -> None:
+        Drawn from the generator `_NOISE_BLOCK` readings at a time (one call
+        instead of one per reading): NumPy draws a block as the same sequence of
+        values that as many small draws would give, so the readings are unchanged.
+        """
         layout = self._layout
-        if self._docked(s):
+        count = len(layout.ir)
+        if self._noise_used >= len(self._noise):
+            self._noise = self._rng.normal(0.0, layout.ir_noise, count * _NOISE_BLOCK).tolist()
+            self._noise_used = 0
+        start = self._noise_used
+        self._noise_used = start + count
+        return self._noise[start : start + count]
+
+    def _update_battery(self, elapsed: float) -> None:
+        layout = self._layout
+        if self._is_docked:
             self._battery = min(1.0, self._battery + elapsed / layout.battery_charge_time)
         else:
             self._battery = max(0.0, self._battery - elapsed / layout.battery_runtime)

@@ -3,6 +3,9 @@
 Writes cost O(subscribers of the written key): every-key subscribers sit in
 one tuple, the others in a tuple per key. The tuples are copied on write, so
 a notification in progress iterates a snapshot whatever (un)subscribes meanwhile.
+A batch write finds its subscribers through a routing table cached per key
+sequence, so the same couple of dozen keys written every control tick cost a
+lookup, not a pass over every key.
 """
 
 from __future__ import annotations
@@ -18,8 +21,10 @@ if TYPE_CHECKING:
 
     Subscriber = Callable[[Mapping[str, Any]], object]
     _Delivery = tuple[tuple["Subscription", ...], Mapping[str, Any]]
+    _Routes = tuple[tuple["Subscription", tuple[str, ...]], ...]
 
 _log = logging.getLogger("pyrobots_aio.state")
+_ROUTES_KEPT = 64  # key sequences whose routing is cached (writers use a handful)
 
 
 class Subscription:
@@ -84,11 +89,12 @@ class Subscription:
 class SubscriberIndex:
     """The subscriptions of one store, indexed by key, and their in-order delivery."""
 
-    __slots__ = ("_by_key", "_every", "_notifying", "_orders", "_pending")
+    __slots__ = ("_by_key", "_every", "_notifying", "_orders", "_pending", "_routes")
 
     def __init__(self) -> None:
         self._every: tuple[Subscription, ...] = ()
         self._by_key: dict[str, tuple[Subscription, ...]] = {}
+        self._routes: dict[tuple[str, ...], _Routes] = {}
         self._orders = itertools.count()
         self._notifying = False
         self._pending: deque[_Delivery] = deque()
@@ -97,6 +103,7 @@ class SubscriberIndex:
         """Register ``callback`` for ``keys`` (None: every key)."""
         watched = _watched(keys)
         sub = Subscription(self, callback, watched, next(self._orders))
+        self._routes.clear()
         if watched is None:
             self._every = (*self._every, sub)
         else:
@@ -106,6 +113,7 @@ class SubscriberIndex:
 
     def remove(self, sub: Subscription) -> None:
         """Unregister ``sub`` (copy-on-write: running notifications keep their snapshot)."""
+        self._routes.clear()
         if sub.keys is None:
             self._every = tuple(s for s in self._every if s is not sub)
             return
@@ -122,19 +130,36 @@ class SubscriberIndex:
         if subs:
             self._run([(subs, MappingProxyType({key: value}))])
 
-    def notify_batch(self, changes: dict[str, Any]) -> None:
-        """Tell each subscriber, once, the written keys it watches."""
+    def notify_batch(self, changes: dict[str, Any], keys: tuple[str, ...]) -> None:
+        """Tell each subscriber, once, the written keys it watches (``keys = tuple(changes)``)."""
+        routes = self._routes.get(keys)
+        if routes is None:
+            routes = self._route(keys)
         deliveries: list[_Delivery] = []
         if self._every:
             deliveries.append((self._every, MappingProxyType(changes)))
-        per_sub: dict[Subscription, dict[str, Any]] = {}
-        for key, value in changes.items():
-            for sub in self._by_key.get(key, ()):
-                per_sub.setdefault(sub, {})[key] = value
-        ordered = sorted(per_sub, key=lambda s: s._order)
-        deliveries.extend(((sub,), MappingProxyType(per_sub[sub])) for sub in ordered)
+        for sub, watched in routes:
+            mine = {key: changes[key] for key in watched}
+            deliveries.append(((sub,), MappingProxyType(mine)))
         if deliveries:
             self._run(deliveries)
+
+    def _route(self, keys: tuple[str, ...]) -> _Routes:
+        """Which subscribers watch which of ``keys`` (in write order), in subscription order.
+
+        Cached per key sequence, since a backend writes the same keys every tick;
+        (un)subscribing clears the cache.
+        """
+        per_sub: dict[Subscription, list[str]] = {}
+        for key in keys:
+            for sub in self._by_key.get(key, ()):
+                per_sub.setdefault(sub, []).append(key)
+        ordered = sorted(per_sub, key=lambda s: s._order)
+        routes = tuple((sub, tuple(per_sub[sub])) for sub in ordered)
+        if len(self._routes) >= _ROUTES_KEPT:
+            self._routes.clear()
+        self._routes[keys] = routes
+        return routes
 
     def _run(self, deliveries: list[_Delivery]) -> None:
         if self._notifying:  # a subscriber wrote: deliver after the write being notified

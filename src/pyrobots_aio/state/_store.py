@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from pyrobots_aio._exceptions import UnknownStateKeyError
 
 from ._filter import MovingAverage
+from ._ledger import WriteLedger
 from ._notify import SubscriberIndex, Subscription, check_key
 from ._reads import READS, tracking
 
@@ -74,7 +75,10 @@ class StateStore(Mapping[str, Any]):
     and the store's version, then calls the key's subscribers synchronously
     with ``{key: value}``; `update` writes a batch as one write. Writes made
     by a subscriber are notified once the current notification is over, so
-    every subscriber sees the writes in the order they happened.
+    every subscriber sees the writes in the order they happened. Writing the
+    value a key already has is a write like any other (stamped, counted,
+    notified): a level condition with ``max_firing_freq=0`` fires on each
+    write that finds it true, and a recorder samples a value that held still.
 
     Not thread-safe: write it from the event loop's thread.
 
@@ -90,11 +94,10 @@ class StateStore(Mapping[str, Any]):
 
     __slots__ = (
         "_clock",
-        "_stamps",
+        "_ledger",
         "_subscribers",
         "_values",
         "_version",
-        "_versions",
         "_windows",
     )
 
@@ -113,8 +116,7 @@ class StateStore(Mapping[str, Any]):
         """
         self._clock = clock or _loop_time
         self._values: dict[str, Any] = {}
-        self._stamps: dict[str, float] = {}
-        self._versions: dict[str, int] = {}
+        self._ledger = WriteLedger()
         self._version = 0
         self._subscribers = SubscriberIndex()
         self._windows: dict[str, MovingAverage] = {}
@@ -159,18 +161,27 @@ class StateStore(Mapping[str, Any]):
     def sample(self, key: str) -> StateSample:
         """Return the value of ``key`` with its timestamp and version."""
         value = self[key]
-        return StateSample(value, self._stamps[key], self._versions[key])
+        return StateSample(value, self._ledger.stamp(key), self._ledger.version(key))
 
     def timestamp(self, key: str) -> float:
         """Return when ``key`` was last written, on the store's clock."""
-        return self.sample(key).timestamp
+        # Recorders ask on every write of the keys they sample: no StateSample, no helper.
+        log = READS.get()
+        if log is not None:
+            log.record(self, key)
+        try:
+            return self._ledger.stamp(key)
+        except KeyError:
+            raise self._unknown(key) from None
 
     def version(self, key: str | None = None) -> int:
         """Return how many times ``key`` was written, or the store's version when None.
 
         The store's version counts write operations: a batch `update` is one.
         """
-        return self._version if key is None else self.sample(key).version
+        if key is None:
+            return self._version
+        return self.sample(key).version
 
     def require(self, *keys: str) -> None:
         """Raise `UnknownStateKeyError`, closest keys in the message, for the first missing key.
@@ -204,7 +215,9 @@ class StateStore(Mapping[str, Any]):
     def set(self, key: str, value: Any) -> None:
         """Write ``value`` under ``key`` and notify its subscribers."""
         check_key(key)
-        self._commit(key, value, self._clock())
+        now = self._clock()
+        self._values[key] = value
+        self._ledger.write(key, now)
         self._version += 1
         self._subscribers.notify(key, value)
 
@@ -247,16 +260,19 @@ class StateStore(Mapping[str, Any]):
             ({'bumper_left': False, 'bumper_right': True}, 1)
         """
         changes: dict[str, Any] = {} if mapping is None else dict(mapping)
-        changes.update(values)
+        if values:
+            changes.update(values)
         if not changes:
             return
-        for key in changes:
-            check_key(key)
+        if not changes.keys() <= self._values.keys():  # known keys are strings already
+            for key in changes:
+                check_key(key)
         now = self._clock()
-        for key, value in changes.items():
-            self._commit(key, value, now)
+        keys = tuple(changes)
+        self._values.update(changes)
+        self._ledger.write_batch(keys, now, changes)  # O(1) for a sequence written before
         self._version += 1
-        self._subscribers.notify_batch(changes)
+        self._subscribers.notify_batch(changes, keys)
 
     def filtered(self, name: str, value: float, window: int = 10) -> float:
         """Add ``value`` to the moving window ``name`` and return the window's mean.
@@ -308,11 +324,6 @@ class StateStore(Mapping[str, Any]):
         return self._subscribers.add(callback, keys)
 
     # -- helpers ----------------------------------------------------------------
-
-    def _commit(self, key: str, value: Any, now: float) -> None:
-        self._values[key] = value
-        self._stamps[key] = now
-        self._versions[key] = self._versions.get(key, 0) + 1
 
     def _unknown(self, key: object) -> UnknownStateKeyError:
         known = sorted(self._values)
