@@ -283,9 +283,7 @@ def run(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -> _T:
         >>> run(later, 60)
         60.0
     """
-    try:
-        asyncio.get_running_loop()
-    except RuntimeError:
+    if asyncio._get_running_loop() is None:  # not inside an except clause: no stray context
         with asyncio.Runner(loop_factory=new_virtual_loop) as runner:
             return runner.run(main(*args))
     name = getattr(main, "__name__", repr(main))

@@ -27,6 +27,8 @@ class EventKind(enum.StrEnum):
     CANCEL_REQUESTED = "action.cancel_requested"
     CANCEL_ESCALATED = "action.cancel_escalated"
     ACTION_ABANDONED = "action.abandoned"
+    ACTION_PAUSED = "action.paused"
+    ACTION_RESUMED = "action.resumed"
     RESOURCE_WAITING = "resource.waiting"
     RESOURCE_ACQUIRED = "resource.acquired"
     RESOURCE_RELEASED = "resource.released"

@@ -90,3 +90,32 @@ async def wait_shielded(waiter: asyncio.Future[Any], deadline: float | None = No
     if interrupted is not None:
         raise interrupted
     return waiter.done()
+
+
+async def sleep_until(deadline: float) -> None:
+    """Sleep until the loop's clock reads ``deadline`` (at once if it already does).
+
+    Unlike ``asyncio.sleep(deadline - now)``, the timer is set at ``deadline``
+    itself, so a virtual-time loop wakes exactly there: no float residue left
+    to sleep on.
+
+    Example:
+        >>> from pyrobots_aio.sim import run
+        >>> async def main() -> float:
+        ...     await sleep_until(1.2)
+        ...     return asyncio.get_running_loop().time()
+        >>> run(main)
+        1.2
+    """
+    loop = asyncio.get_running_loop()
+    fut = loop.create_future()
+    timer = loop.call_at(deadline, _set_unless_done, fut)
+    try:
+        await fut
+    finally:
+        timer.cancel()
+
+
+def _set_unless_done(fut: asyncio.Future[None]) -> None:
+    if not fut.done():
+        fut.set_result(None)

@@ -17,11 +17,14 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine
 
     from ._executive import Executive
-    from ._handle import ActionHandle
+    from ._handle import ActionHandle, Hooks
 
 P = ParamSpec("P")
 T = TypeVar("T")
 R = TypeVar("R")
+if TYPE_CHECKING:
+    Body = Callable[Concatenate[R, P], Coroutine[Any, Any, T]]
+    """An action's function: an ``async def`` taking the robot first."""
 
 
 def executive_of(robot: object, name: str) -> Executive:
@@ -42,7 +45,11 @@ class Action(Generic[R, P, T]):
     Created by `action`; calling it starts the action and returns its handle.
     """
 
-    def __init__(self, fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]]) -> None:
+    def __init__(
+        self,
+        fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]],
+        hooks: Hooks | None = None,
+    ) -> None:
         if not inspect.iscoroutinefunction(fn):
             msg = (
                 f"@action needs an 'async def' function taking the robot first, "
@@ -50,6 +57,7 @@ class Action(Generic[R, P, T]):
             )
             raise ActionDefinitionError(msg)
         self.fn = fn
+        self.hooks = hooks
         self.name: str = getattr(fn, "__name__", repr(fn))
         functools.update_wrapper(self, fn)
 
@@ -57,7 +65,7 @@ class Action(Generic[R, P, T]):
         executive: Executive | None = getattr(robot, "_executive", None)
         if executive is None:
             executive = executive_of(robot, self.name)  # raises, naming what was passed
-        return executive.spawn(self.name, self.fn, self.fn(robot, *args, **kwargs))
+        return executive.spawn(self.name, self.fn, self.fn(robot, *args, **kwargs), self.hooks)
 
     @overload
     def __get__(self, instance: None, owner: type[Any]) -> Action[R, P, T]: ...
@@ -94,8 +102,33 @@ class BoundAction(Generic[P, T]):
         return f"<action {self.action.name} bound to {self.robot!r}>"
 
 
-def action(fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]]) -> Action[R, P, T]:
+@overload
+def action(fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]]) -> Action[R, P, T]: ...
+
+
+@overload
+def action(
+    *,
+    on_pause: Callable[[R], object] | None = None,
+    on_resume: Callable[[R], object] | None = None,
+) -> Callable[[Callable[Concatenate[R, P], Coroutine[Any, Any, T]]], Action[R, P, T]]: ...
+
+
+def action(
+    fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]] | None = None,
+    *,
+    on_pause: Callable[[R], object] | None = None,
+    on_resume: Callable[[R], object] | None = None,
+) -> (
+    Action[R, P, T]
+    | Callable[[Callable[Concatenate[R, P], Coroutine[Any, Any, T]]], Action[R, P, T]]
+):
     """Turn an ``async def`` taking the robot first into an action.
+
+    ``@action(on_pause=..., on_resume=...)`` also gives hooks, called with the
+    robot when the action freezes and thaws (`ActionHandle.pause`): stop the
+    actuators there, and restore them. A hook may be a plain function or
+    return an awaitable (run on its own; a failure is logged).
 
     Example:
         >>> from pyrobots_aio import Robot, action, ActionCancelled
@@ -108,5 +141,17 @@ def action(fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]]) -> Action[R,
         ...         raise
         >>> safe_walk
         <action safe_walk>
+        >>> @action(on_pause=lambda robot: robot.state.update(motors="off"))
+        ... async def wave(robot: Robot) -> None:
+        ...     await robot.sleep(1)
+        >>> wave
+        <action wave>
     """
-    return Action(fn)
+    hooks = None if on_pause is None and on_resume is None else (on_pause, on_resume)
+    if fn is not None:
+        return Action(fn, hooks)
+
+    def decorate(f: Body[R, P, T]) -> Action[R, P, T]:
+        return Action(f, hooks)
+
+    return decorate

@@ -23,10 +23,14 @@ from .._core._loops import current_loop, wrong_loop
 from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
-from ._handle import _DONE, ActionHandle, ActionState, Outcome, drive
+from ._handle import ActionHandle, ActionState, Outcome, drive
+from ._pause import freeze, frozen, run_hooks, stop_frozen_clock, thaw
+from ._phases import DONE
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
+
+    from ._handle import Hooks
 
 T = TypeVar("T")
 
@@ -60,6 +64,8 @@ class Executive:
         self._watch: deque[tuple[float, int, ActionHandle[Any]]] = deque()
         self._watch_timer: asyncio.TimerHandle | None = None
         self._closing = False
+        self.paused = 0
+        """How many actions are paused now (0: nothing is frozen, the fast path)."""
 
     # -- lifecycle --------------------------------------------------------
 
@@ -124,6 +130,7 @@ class Executive:
         name: str,
         fn: Callable[..., Coroutine[Any, Any, T]],
         coro: Coroutine[Any, Any, T],
+        hooks: Hooks | None = None,
     ) -> ActionHandle[T]:
         """Start ``coro`` (made by the action function ``fn``) as an action now; return its handle.
 
@@ -132,7 +139,7 @@ class Executive:
         """
         loop = self._loop
         parent = current_action.get()
-        if parent is not None and (parent._executive is not self or parent._phase == _DONE):
+        if parent is not None and (parent._executive is not self or parent._phase == DONE):
             parent = None
         if (
             loop is None
@@ -146,6 +153,9 @@ class Executive:
         self._next_id = ident + 1
         handle: ActionHandle[T] = ActionHandle(self, loop, ident, name, parent)
         handle._fn = fn
+        handle._hooks = hooks
+        if self.paused and parent is not None and frozen(parent):
+            handle._frozen_since = handle.spawned_at  # a child of a frozen action starts frozen
         handle._task = loop.create_task(drive(handle, coro), name=f"{name}#{ident}")
         self._running[ident] = handle
         if parent is None:
@@ -216,6 +226,8 @@ class Executive:
             node._cancel_requested = True
             node._cancel_reason = reason
             node._cancel_by = by
+            if node._frozen_since is not None:  # cancellation thaws it: its cleanup runs
+                stop_frozen_clock(node)
             node._interrupt()
             self._watch_later(node, _ESCALATE)
             if self.instruments.items:
@@ -274,6 +286,53 @@ class Executive:
         for handle in pending:
             handle._on_done(countdown.tick)
         return countdown.future
+
+    # -- pausing ----------------------------------------------------------
+
+    def pause_tree(
+        self, handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
+    ) -> None:
+        """Pause ``handle``: freeze its subtree, run the pause hooks, record who and why."""
+        if not handle._paused:
+            self.paused += 1
+        newly = freeze(handle, reason, by)
+        if self.instruments.items:
+            for node in newly:
+                self._emit(
+                    EventKind.ACTION_PAUSED,
+                    node,
+                    reason=reason,
+                    by=by.id if by is not None else None,
+                    paused=handle.id,
+                )
+        run_hooks(newly, 0, "pause")
+
+    def resume_tree(self, handle: ActionHandle[Any]) -> None:
+        """Resume ``handle``: thaw what is no longer under a pause, run the resume hooks."""
+        self.unpause(handle)
+        thawed = thaw(handle)
+        if self.instruments.items:
+            for node in thawed:
+                self._emit(EventKind.ACTION_RESUMED, node, resumed=handle.id)
+        run_hooks(thawed, 1, "resume")
+
+    def unpause(self, handle: ActionHandle[Any]) -> None:
+        """Count ``handle`` as no longer paused (resumed, or done while paused)."""
+        if handle._paused:
+            handle._paused = False
+            self.paused -= 1
+
+    def pause_all(self, reason: str | None) -> None:
+        """Pause every action of the root scope (their subtrees freeze with them)."""
+        by = current_action.get()
+        for handle in list(self._roots):
+            if not handle.done():
+                self.pause_tree(handle, reason, by)
+
+    def resume_all(self) -> None:
+        """Resume every paused action."""
+        for handle in [h for h in self._running.values() if h._paused]:
+            self.resume_tree(handle)
 
     # -- the watchdog -----------------------------------------------------
 

@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 from .._core._loops import current_loop, wrong_loop
 from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
 from ._context import current_action
+from ._pause import frozen, frozen_time, stepped
+from ._phases import DONE, FINISHING, PENDING, RUNNING
 from ._where import definition, location
 
 if TYPE_CHECKING:
@@ -31,8 +33,8 @@ if TYPE_CHECKING:
     from ._executive import Executive
 
 T = TypeVar("T")
-
-_PENDING, _RUNNING, _FINISHING, _DONE = range(4)
+Hooks = tuple["Callable[[Any], object] | None", "Callable[[Any], object] | None"]
+"""An action's pause and resume hooks, each called with the robot (or None)."""
 
 
 class Outcome(enum.Enum):
@@ -55,15 +57,17 @@ class ActionState(enum.Enum):
     RUNNING = "running"
     CANCELLING = "cancelling"
     """Cancellation requested; its cleanup is running."""
+    PAUSED = "paused"
+    """Frozen where it stands: it or an ancestor was paused (`ActionHandle.pause`)."""
     FINISHING = "finishing"
     """Its body has ended; its children are being cancelled and awaited."""
     DONE = "done"
 
 
 _PHASE_STATES = {
-    _PENDING: ActionState.PENDING,
-    _FINISHING: ActionState.FINISHING,
-    _DONE: ActionState.DONE,
+    PENDING: ActionState.PENDING,
+    FINISHING: ActionState.FINISHING,
+    DONE: ActionState.DONE,
 }
 
 
@@ -97,11 +101,18 @@ class ActionHandle(Generic[T]):
         "_executive",
         "_finalizers",
         "_fn",
+        "_frozen_since",
+        "_frozen_total",
+        "_hooks",
         "_internal",
         "_loop",
         "_outcome",
+        "_pause_reason",
+        "_paused",
+        "_paused_by",
         "_phase",
         "_task",
+        "_thaw",
         "_unretrieved",
         "_value",
         "_waiters",
@@ -137,7 +148,7 @@ class ActionHandle(Generic[T]):
         self._task: asyncio.Task[None] | None = None
         self._coro: Coroutine[Any, Any, T] | None = None
         self._fn: Callable[..., object] | None = None
-        self._phase = _PENDING
+        self._phase = PENDING
         self._outcome = Outcome.NOT_DONE
         self._value: T | None = None
         self._error: BaseException | None = None
@@ -149,12 +160,19 @@ class ActionHandle(Generic[T]):
         self._internal: list[Callable[[ActionHandle[T]], object]] | None = None
         self._finalizers: list[Callable[[], None]] | None = None
         self._unretrieved: weakref.finalize[Any, Any] | None = None
+        self._paused = False
+        self._pause_reason: str | None = None
+        self._paused_by: ActionHandle[Any] | None = None
+        self._frozen_since: float | None = None
+        self._frozen_total = 0.0
+        self._thaw: asyncio.Future[None] | None = None
+        self._hooks: Hooks | None = None
 
     # -- awaiting ---------------------------------------------------------
 
     def __await__(self) -> Generator[Any, None, T]:
         # A generator, with its helpers inlined: every awaited action pays for this.
-        if self._phase != _DONE:
+        if self._phase != DONE:
             loop = self._loop
             if current_loop() is not loop:
                 what = f"await action {self.name}#{self.id}"
@@ -198,7 +216,7 @@ class ActionHandle(Generic[T]):
         ``asyncio.timeout`` expired) leaves the action running. ``await handle``
         owns it instead.
         """
-        if self._phase != _DONE:
+        if self._phase != DONE:
             fut = self._waiter("wait for")
             try:
                 await fut
@@ -234,10 +252,12 @@ class ActionHandle(Generic[T]):
     def state(self) -> ActionState:
         """Where the action is now (pending, waiting, running, cancelling, finishing, done)."""
         phase = self._phase
-        if phase != _RUNNING:
+        if phase != RUNNING:
             return _PHASE_STATES[phase]
         if self._cancel_requested:
             return ActionState.CANCELLING
+        if self._executive.paused and frozen(self):
+            return ActionState.PAUSED
         return ActionState.WAITING if self.awaiting else ActionState.RUNNING
 
     @property
@@ -257,7 +277,7 @@ class ActionHandle(Generic[T]):
 
     def done(self) -> bool:
         """Return True once the action has finished (any outcome), cleanup and children included."""
-        return self._phase == _DONE
+        return self._phase == DONE
 
     def cancelled(self) -> bool:
         """Return True if the action finished with outcome `Outcome.CANCELLED`."""
@@ -280,7 +300,7 @@ class ActionHandle(Generic[T]):
         Raises:
             asyncio.InvalidStateError: The action is not done yet.
         """
-        if self._phase != _DONE:
+        if self._phase != DONE:
             msg = f"action {self.name}#{self.id} is not done yet; await it or use wait_done()"
             raise asyncio.InvalidStateError(msg)
         self._retrieved()
@@ -297,7 +317,7 @@ class ActionHandle(Generic[T]):
 
     def location(self) -> str | None:
         """Return the ``file:line`` where the action's body is now suspended, if it runs."""
-        if self._coro is None or self._phase != _RUNNING:
+        if self._coro is None or self._phase != RUNNING:
             return None
         where = location(self._coro)
         if where is None and self._fn is not None:  # only internal frames: waiting for a lock
@@ -312,10 +332,71 @@ class ActionHandle(Generic[T]):
         The action sees `ActionCancelled` at its next ``await``; its cleanup may
         await. Returns False if the action was already done.
         """
-        if self._phase == _DONE:
+        if self._phase == DONE:
             return False
         self._executive.cancel_tree(self, reason, current_action.get())
         return True
+
+    def pause(self, reason: str | None = None) -> bool:
+        """Freeze this action and its subtree where they stand, without unwinding them.
+
+        Each frozen action stops at its next resumption point (whatever it
+        awaits may complete, but its code does not go on) until `resume`.
+        Resources stay held; `Robot.sleep` does not count the frozen time;
+        cancellation still reaches it at once (and its cleanup runs unfrozen).
+        Pause hooks (``@action(on_pause=...)``) run now. Returns False if the
+        action is done.
+
+        Example:
+            >>> import asyncio
+            >>> from pyrobots_aio import Robot, action
+            >>> @action
+            ... async def count(robot: Robot, ticks: list[float]) -> None:
+            ...     for _ in range(3):
+            ...         await robot.sleep(1)
+            ...         ticks.append(robot.time())
+            >>> async def main() -> list[float]:
+            ...     ticks: list[float] = []
+            ...     async with Robot() as robot:
+            ...         handle = count(robot, ticks)
+            ...         await robot.sleep(1.5)
+            ...         handle.pause("hold still")
+            ...         await robot.sleep(10)
+            ...         handle.resume()
+            ...         await handle
+            ...     return ticks
+            >>> from pyrobots_aio.sim import run
+            >>> run(main)  # ten frozen seconds in the middle of the second tick
+            [1.0, 12.0, 13.0]
+        """
+        if self._phase == DONE:
+            return False
+        self._executive.pause_tree(self, reason, current_action.get())
+        return True
+
+    def resume(self) -> bool:
+        """Thaw what `pause` froze (descendants paused on their own stay paused).
+
+        Returns False if this action was not paused (or is done).
+        """
+        if self._phase == DONE or not self._paused:
+            return False
+        self._executive.resume_tree(self)
+        return True
+
+    @property
+    def paused(self) -> bool:
+        """Whether it is frozen: paused itself, or under a paused ancestor (and not cancelled)."""
+        return bool(self._executive.paused) and frozen(self)
+
+    @property
+    def pause_reason(self) -> str | None:
+        """The reason given to `pause` on this action, while it is paused."""
+        return self._pause_reason
+
+    def frozen_time(self) -> float:
+        """Seconds (on the robot's clock) this action has spent frozen so far."""
+        return frozen_time(self)
 
     # -- executive side ---------------------------------------------------
 
@@ -338,7 +419,7 @@ class ActionHandle(Generic[T]):
         once if it already is. An exception in it is logged with its traceback on
         ``pyrobots_aio.actions`` and disturbs nothing else.
         """
-        if self._phase == _DONE:
+        if self._phase == DONE:
             _schedule(callback, self)
             return
         if self._callbacks is None:
@@ -370,7 +451,7 @@ class ActionHandle(Generic[T]):
         A pending action is not touched: `drive` sees the request and never starts
         the body; a finishing one only waits for its (cancelled) children.
         """
-        if self._phase == _RUNNING and self._task is not None:
+        if self._phase == RUNNING and self._task is not None:
             self._task.cancel(self._cancel_reason)
 
     def _abandon(self, after: float) -> None:
@@ -414,7 +495,7 @@ class ActionHandle(Generic[T]):
     def _settle(
         self, outcome: Outcome, value: Any = None, error: BaseException | None = None
     ) -> None:
-        if self._phase == _DONE:  # abandoned by the watchdog: its outcome is already told
+        if self._phase == DONE:  # abandoned by the watchdog: its outcome is already told
             return
         self._outcome = outcome
         self._value = value
@@ -426,11 +507,13 @@ class ActionHandle(Generic[T]):
         With ``release`` False (an abandoned action) the finalizers wait for its
         task to end.
         """
-        if self._phase == _DONE:
+        if self._phase == DONE:
             return
         if release and self._finalizers is not None:
             self._run_finalizers()
-        self._phase = _DONE
+        if self._paused:
+            self._executive.unpause(self)
+        self._phase = DONE
         self._coro = None
         self.finished_at = self._loop.time()
         if self._callbacks is not None:  # scheduled first: they run before awaiters resume
@@ -507,29 +590,29 @@ async def drive(  # noqa: PLR0912 (one flat coroutine: every action pays for eac
             handle._settle(Outcome.CANCELLED, error=handle._interrupted())
         else:
             handle._coro = coro
-            handle._phase = _RUNNING
+            handle._phase = RUNNING
             handle.started_at = handle._loop.time()
             executive = handle._executive
             if executive.instruments.items:
                 executive.started(handle)
             try:
-                value = await coro
+                value = await stepped(handle, coro)
             except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
                 handle._settle(Outcome.FAILED, error=exc)
                 handle._complete()
                 raise
             except BaseException as exc:
-                if handle._phase == _DONE:  # abandoned: how its body ends changes nothing
+                if handle._phase == DONE:  # abandoned: how its body ends changes nothing
                     return
                 _settle_error(handle, exc)
             else:
-                if handle._phase == _DONE:
+                if handle._phase == DONE:
                     return
                 if handle._cancel_requested:  # cancellation swallowed: still CANCELLED
                     handle._settle(Outcome.CANCELLED, value, handle._interrupted())
                 else:
                     handle._outcome, handle._value = Outcome.SUCCEEDED, value
-        handle._phase = _FINISHING
+        handle._phase = FINISHING
         if handle._children:
             await _reap(handle)
         if handle._cancel_requested and handle._outcome is Outcome.SUCCEEDED:
@@ -570,13 +653,23 @@ def _settle_error(handle: ActionHandle[Any], exc: BaseException) -> None:
         )
         handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
     else:
-        handle._settle(Outcome.FAILED, error=exc.with_traceback(_without_this_frame(exc)))
+        handle._settle(Outcome.FAILED, error=exc.with_traceback(_from_the_body(exc)))
 
 
-def _without_this_frame(error: BaseException) -> TracebackType | None:
-    """The traceback of ``error`` from the action's own code on (this module's frame dropped)."""
+def _from_the_body(error: BaseException) -> TracebackType | None:
+    """The traceback of ``error`` from the action's own code on.
+
+    The executive's frames (the task's and the pause trampoline's) are dropped:
+    they hold the handle, which holds the error, and the cycle would keep a
+    forgotten failure from being reported when its handle goes.
+    """
     tb = error.__traceback__
-    return tb.tb_next if tb is not None else None
+    while tb is not None and tb.tb_frame.f_code in _OWN_CODE:
+        tb = tb.tb_next
+    return tb
+
+
+_OWN_CODE = frozenset({drive.__code__, stepped.__code__})
 
 
 def _report_failure(log: ScopedLogger, name: str, ident: int, report: str) -> None:

@@ -83,7 +83,7 @@ class Lock:
 
     def __call__(self, target: Any) -> Any:
         if isinstance(target, Action):
-            return Action(self._decorate(target.fn))
+            return Action(self._decorate(target.fn), target.hooks)
         if inspect.iscoroutinefunction(target):
             return self._decorate(target)
         msg = f"{self!r} decorates an 'async def' or an @action, got {target!r}"

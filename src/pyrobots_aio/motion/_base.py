@@ -52,6 +52,11 @@ Pose2D = tuple[float, float, float]
 """A planar pose ``(x, y, yaw)``, in metres and radians."""
 
 
+def park(robot: DriveBase) -> None:
+    """The motion actions' pause hook: stop the wheels (the controller resumes on thaw)."""
+    robot.stop()
+
+
 class DriveBase(Robot, abc.ABC):
     """A differential-drive robot base: ``drive(v, w)``, ``stop()`` and the motion actions.
 
@@ -126,7 +131,7 @@ class DriveBase(Robot, abc.ABC):
 
     # -- motion actions ---------------------------------------------------
 
-    @action
+    @action(on_pause=park)
     @lock(WHEELS)
     async def drive_distance(self, distance: float, speed: float = 0.2) -> float:
         """Drive straight ``distance`` metres (negative: backwards); return the distance done."""
@@ -150,7 +155,7 @@ class DriveBase(Robot, abc.ABC):
         await self._steer(step)
         return math.copysign(travelled(), goal)
 
-    @action
+    @action(on_pause=park)
     @lock(WHEELS)
     async def rotate_angle(self, angle: float, speed: float = 1.0) -> float:
         """Turn in place by ``angle`` radians (positive: counter-clockwise); return the turn."""
@@ -173,7 +178,7 @@ class DriveBase(Robot, abc.ABC):
         await self._steer(step)
         return turned
 
-    @action
+    @action(on_pause=park)
     @lock(WHEELS)
     async def navigate_to(self, pose: PoseLike, speed: float = 0.2) -> None:
         """Go to ``pose`` (any format ``robot.poses.get`` reads): turn, drive, then turn to its yaw.
@@ -211,7 +216,7 @@ class DriveBase(Robot, abc.ABC):
         if self.state["docked"]:
             await self.drive_distance(UNDOCK_DISTANCE)
 
-    @action
+    @action(on_pause=park)
     @lock(WHEELS)
     async def dock(self) -> None:
         """Go in front of the dock (`DOCK_APPROACH`), then reverse slowly onto it until ``docked``.

@@ -10,10 +10,14 @@ polling: the waiting action sleeps on a future that ``run`` resolves.
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
+
+from ..actions import current_action
 
 if TYPE_CHECKING:
     from collections.abc import Callable
+
+    from ..actions import ActionHandle
 
 
 class Controllers:
@@ -39,7 +43,9 @@ class Controllers:
     __slots__ = ("_waiting",)
 
     def __init__(self) -> None:
-        self._waiting: dict[Callable[[], bool], asyncio.Future[None]] = {}
+        self._waiting: dict[
+            Callable[[], bool], tuple[asyncio.Future[None], ActionHandle[Any] | None]
+        ] = {}
 
     def __len__(self) -> int:
         return len(self._waiting)
@@ -48,10 +54,11 @@ class Controllers:
         """Wait while `run` calls ``step()`` after each update, until it returns True.
 
         An exception raised by ``step`` ends the wait with that exception;
-        cancelling the wait removes ``step``.
+        cancelling the wait removes ``step``. While the calling action is
+        paused, ``step`` is not called (its pause hook stopped the wheels).
         """
         fut = asyncio.get_running_loop().create_future()
-        self._waiting[step] = fut
+        self._waiting[step] = (fut, current_action.get())
         try:
             await fut
         finally:
@@ -59,8 +66,8 @@ class Controllers:
 
     def run(self) -> None:
         """Call every waiting ``step`` once (the base's sensors are fresh)."""
-        for step, fut in list(self._waiting.items()):
-            if fut.done():
+        for step, (fut, handle) in list(self._waiting.items()):
+            if fut.done() or (handle is not None and handle.paused):
                 continue
             try:
                 finished = step()
@@ -72,14 +79,14 @@ class Controllers:
 
     def fail(self, error: Exception) -> None:
         """End every wait with ``error`` (a base that lost its sensors: stale odometry)."""
-        for fut in self._waiting.values():
+        for fut, _ in self._waiting.values():
             if not fut.done():
                 fut.set_exception(error)
         self._waiting.clear()
 
     def cancel(self) -> None:
         """Cancel every wait (the base is stopping)."""
-        for fut in self._waiting.values():
+        for fut, _ in self._waiting.values():
             if not fut.done():
                 fut.cancel()
         self._waiting.clear()

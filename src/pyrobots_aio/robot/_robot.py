@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Self, TypeVar
 from .._core._instrument import Instrument, Instruments
 from .._core._logging import LogScope, check_level
 from .._core._loops import current_loop, no_asyncio_loop
+from .._core._waiting import sleep_until
 from .._exceptions import ActionDefinitionError, ActionError, EventLoopError, PyRobotsError
 from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
 from ..actions import render_tree as _render_tree
@@ -114,7 +115,7 @@ class Robot(StateMethods):
         elif isinstance(item, Action):
             self._attach_one(item)
         else:
-            self._attach_one(action(item))  # type: ignore[arg-type]
+            self._attach_one(action(item))  # type: ignore[call-overload]
 
     def _attach_one(self, act: Action[Any, Any, Any]) -> None:
         if hasattr(type(self), act.name) or act.name in vars(self):
@@ -270,8 +271,31 @@ class Robot(StateMethods):
     # -- actions ----------------------------------------------------------
 
     async def sleep(self, seconds: float) -> None:
-        """Sleep ``seconds`` of the robot's clock (virtual time in lockstep simulation)."""
-        await asyncio.sleep(seconds)
+        """Sleep ``seconds`` of the robot's clock (virtual time in lockstep simulation).
+
+        Inside an action, time spent paused does not count: an action paused
+        for 10 s in the middle of ``robot.sleep(2)`` wakes 12 s after it began.
+        """
+        handle = current_action.get()
+        if handle is None or handle._executive is not self._executive:
+            await asyncio.sleep(seconds)
+            return
+        loop = self._executive.loop
+        start, frozen_before = loop.time(), handle.frozen_time()
+        await asyncio.sleep(seconds)  # one timer, unless the action was frozen meanwhile
+        while (frozen := handle.frozen_time() - frozen_before) > 0:
+            deadline = start + seconds + frozen  # absolute: no float residue to sleep on
+            if loop.time() >= deadline:
+                return
+            await sleep_until(deadline)
+
+    def pause_all(self, reason: str | None = None) -> None:
+        """Pause every running action (see `ActionHandle.pause`); `resume_all` thaws them."""
+        self._executive.pause_all(reason)
+
+    def resume_all(self) -> None:
+        """Resume every paused action."""
+        self._executive.resume_all()
 
     def time(self) -> float:
         """The robot's clock: the running loop's time (simulation time in lockstep)."""

@@ -1,0 +1,3 @@
+"""The phases of an action's life, as the handle and the executive track them."""
+
+PENDING, RUNNING, FINISHING, DONE = range(4)
