@@ -6,7 +6,7 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 2. ``resources``, ``state``, ``poses``
 3. ``actions``, ``events``
 4. ``robot`` (the composition root)
-5. ``recording``, ``sim``, ``testing``, ``cli`` (public API only)
+5. ``recording``, ``sim``, ``ros2``, ``testing``, ``cli`` (public API only)
 """
 
 from ._core._instrument import EventKind as EventKind
@@ -18,6 +18,8 @@ from ._exceptions import ActionError as ActionError
 from ._exceptions import ActionInterrupted as ActionInterrupted
 from ._exceptions import ActionSkipped as ActionSkipped
 from ._exceptions import CorruptRecordingError as CorruptRecordingError
+from ._exceptions import GoalError as GoalError
+from ._exceptions import GoalRejectedError as GoalRejectedError
 from ._exceptions import InvalidConditionError as InvalidConditionError
 from ._exceptions import InvalidPoseError as InvalidPoseError
 from ._exceptions import InvalidResourceError as InvalidResourceError
@@ -29,10 +31,14 @@ from ._exceptions import PyRobotsError as PyRobotsError
 from ._exceptions import RecordingError as RecordingError
 from ._exceptions import ResourceError as ResourceError
 from ._exceptions import RobotNotRunningError as RobotNotRunningError
+from ._exceptions import Ros2Error as Ros2Error
+from ._exceptions import Ros2NameError as Ros2NameError
+from ._exceptions import Ros2UnavailableError as Ros2UnavailableError
 from ._exceptions import SimulationError as SimulationError
 from ._exceptions import SimulationUnavailableError as SimulationUnavailableError
 from ._exceptions import StateError as StateError
 from ._exceptions import TooManyActions as TooManyActions
+from ._exceptions import TopicTypeError as TopicTypeError
 from ._exceptions import UnknownFrameError as UnknownFrameError
 from ._exceptions import UnknownStateKeyError as UnknownStateKeyError
 from .actions import Action as Action
@@ -82,6 +88,8 @@ __all__ = [
     "FrameProvider",
     "FrameTree",
     "GenericRobot",
+    "GoalError",
+    "GoalRejectedError",
     "Instrument",
     "InvalidConditionError",
     "InvalidPoseError",
@@ -101,12 +109,16 @@ __all__ = [
     "ResourceManager",
     "Robot",
     "RobotNotRunningError",
+    "Ros2Error",
+    "Ros2NameError",
+    "Ros2UnavailableError",
     "SimulationError",
     "SimulationUnavailableError",
     "StateError",
     "StateSample",
     "StateStore",
     "TooManyActions",
+    "TopicTypeError",
     "UnknownFrameError",
     "UnknownStateKeyError",
     "action",
