@@ -176,6 +176,12 @@ class Ros2Subscription:
         """How many publishers this subscription is matched with now."""
         return self.matches.count
 
+    @property
+    def queued(self) -> int:
+        """Messages received from DDS and not yet delivered on the loop (the loop's lag)."""
+        with self._lock:
+            return len(self._inbox)
+
     async def wait_for_publishers(self, count: int = 1) -> int:
         """Return once at least ``count`` publishers are matched (wrap it in a timeout)."""
         return await self.matches.wait(count)
