@@ -47,12 +47,14 @@ class PlainNode:
     reaches the test's loop through ``call_soon_threadsafe``.
     """
 
-    def __init__(self, name: str, *, threads: int = 1) -> None:
+    def __init__(
+        self, name: str, *, threads: int = 1, loop: asyncio.AbstractEventLoop | None = None
+    ) -> None:
         import rclpy
         from rclpy.context import Context
         from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 
-        self.loop = asyncio.get_running_loop()
+        self.loop = loop or asyncio.get_running_loop()
         self.context = Context()
         self.context.init(args=[])
         self.node = rclpy.create_node(name, context=self.context)

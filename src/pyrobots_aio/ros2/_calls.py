@@ -102,7 +102,8 @@ async def _cancel(
     answer = await thread.wrap(goal_handle.cancel_goal_async())
     if not answer.goals_canceling:
         _log.warning(
-            "the action server of %s refused to cancel the goal (return code %s); it may go on",
+            "the action server of %s did not accept to cancel the goal "
+            "(cancel response code %s, no goal canceling); it may go on",
             name,
             answer.return_code,
         )

@@ -48,6 +48,13 @@ def _settle(
         future.set_result(result)
 
 
+def _fail_quietly(future: asyncio.Future[Any], error: BaseException) -> None:
+    """Fail ``future``; whoever awaits it gets ``error``, and nobody is told if nobody does."""
+    if not future.done():
+        future.set_exception(error)
+        future.exception()  # retrieved: a future nobody awaits any more is not reported
+
+
 class RosThread:
     """An rclpy node spinning on its own thread, handing its work to the event loop.
 
@@ -125,11 +132,11 @@ class RosThread:
         await self._joined()
         error = Ros2Error(f"the ROS 2 node {self.name!r} stopped")
         for future in list(self._pending):
-            _settle(future, error=error)
+            _fail_quietly(future, error)
         with self._lock:
             waiters, self._waiters = self._waiters, []
-        for _, future in waiters:
-            _settle(future, error=error)
+        for _, waiter in waiters:
+            _fail_quietly(waiter, error)
 
     async def _joined(self) -> None:
         """Wait for the thread to finish its teardown (shielded: it is quick and must end)."""
