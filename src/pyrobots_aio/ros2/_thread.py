@@ -163,12 +163,18 @@ class RosThread:
         self.to_loop(_settle, ready, None)
         try:
             if not stopping:
-                executor.spin()
-        except Exception:  # a bug: every callback of ours catches its own errors
-            _log.exception("the ROS 2 executor of %s failed; the node stops", self.name)
+                self._spin(executor)
         finally:
             self._destroy()
             self.to_loop(_settle, self._stopped, None)
+
+    def _spin(self, executor: Any) -> None:
+        """``executor.spin()``, except that a callback that raises does not stop the node."""
+        while executor.context.ok() and not executor._is_shutdown:  # as rclpy's spin() loops
+            try:
+                executor.spin_once()
+            except Exception:  # rclpy re-raises a callback's error here: log it, go on
+                _log.exception("a ROS 2 callback of node %s failed", self.name)
 
     def _create(self) -> Any:
         rclpy_node = rclpy_module("rclpy.node")
