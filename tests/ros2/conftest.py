@@ -16,7 +16,7 @@ import os
 import random
 import threading
 import warnings
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 import pytest_asyncio
@@ -65,8 +65,8 @@ async def plain() -> AsyncIterator[Callable[..., PlainNode]]:
     """Make plain rclpy nodes (``plain("name")``); they are closed when the test ends."""
     made: list[PlainNode] = []
 
-    def make(name: str, *, threads: int = 1) -> PlainNode:
-        node = PlainNode(name, threads=threads)
+    def make(name: str, **options: Any) -> PlainNode:
+        node = PlainNode(name, **options)
         made.append(node)
         return node
 

@@ -48,7 +48,12 @@ class PlainNode:
     """
 
     def __init__(
-        self, name: str, *, threads: int = 1, loop: asyncio.AbstractEventLoop | None = None
+        self,
+        name: str,
+        *,
+        threads: int = 1,
+        loop: asyncio.AbstractEventLoop | None = None,
+        spin: bool = True,
     ) -> None:
         import rclpy
         from rclpy.context import Context
@@ -65,7 +70,26 @@ class PlainNode:
         )
         self.executor.add_node(self.node)
         self.thread = threading.Thread(target=self.executor.spin, name=f"plain {name}")
+        if spin:
+            self.thread.start()
+
+    def spin(self) -> None:
+        """Start spinning (for a node made with ``spin=False``)."""
         self.thread.start()
+
+    def knows_client(self, node: str, namespace: str, name: str, *, action: bool) -> bool:
+        """Whether this node's view of the graph has ``node``'s client of ``name``."""
+        from rclpy.action import get_action_client_names_and_types_by_node
+        from rclpy.impl.implementation_singleton import rclpy_implementation
+
+        try:
+            if action:
+                clients = get_action_client_names_and_types_by_node(self.node, node, namespace)
+            else:
+                clients = self.node.get_client_names_and_types_by_node(node, namespace)
+        except rclpy_implementation.NodeNameNonExistentError:  # not discovered yet
+            return False
+        return name in dict(clients)
 
     def to_loop(self, fn: Callable[..., object], *args: object) -> None:
         """From rclpy's thread: run ``fn(*args)`` on the test's loop (if it still runs)."""
@@ -98,7 +122,8 @@ class PlainNode:
     def close(self) -> None:
         """Stop spinning; destroy the node and the context."""
         self.executor.shutdown()
-        self.thread.join()
+        if self.thread.is_alive():
+            self.thread.join()
         self.node.destroy_node()
         self.context.try_shutdown()
 
@@ -109,3 +134,15 @@ async def next_where(queue: asyncio.Queue[Any], predicate: Callable[[Any], bool]
         message = await queue.get()
         if predicate(message):
             return message
+
+
+async def meet(robot: Any, server: PlainNode, name: str, interface: type) -> None:
+    """Wait until the robot sees ``server``'s server of ``name`` and the server sees its client.
+
+    A DDS server answers a request only once it has matched the client's
+    reader (rmw waits 100 ms for that, then drops the response): on a loaded
+    machine, a test waits for both views of the graph before the first request.
+    """
+    await robot.ros2.wait_for_server(name, interface)
+    node, namespace, action = robot.ros2.name, robot.ros2.namespace, hasattr(interface, "Goal")
+    await wait_for(lambda: server.knows_client(node, namespace, name, action=action))

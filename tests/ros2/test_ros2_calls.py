@@ -8,7 +8,7 @@ import threading
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from ros2_support import DEADLINE, PlainNode, require_rclpy
+from ros2_support import DEADLINE, PlainNode, meet, require_rclpy, wait_for
 
 require_rclpy()
 
@@ -45,6 +45,7 @@ async def test_a_call_reaches_a_plain_service_and_returns_its_response(
     robot = Robot()
     attach_ros2(robot, "executive", namespace="/robot1")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server, "/robot1/gripper", SetBool)
         response = await robot.ros2.call("gripper", SetBool.Request(data=True))
         assert (response.success, response.message) == (True, "closed")
         response = await robot.ros2.call("/robot1/gripper", SetBool.Request(data=False))
@@ -59,10 +60,13 @@ async def test_a_call_waits_for_its_server_to_appear(plain: Callable[..., PlainN
         call = asyncio.ensure_future(robot.ros2.call("/late", Trigger.Request()))
         await asyncio.sleep(0)
         assert not call.done()
-        server = plain("late_driver")
+        server = plain("late_driver", spin=False)  # it answers once it knows the client
         server.node.create_service(
             Trigger, "/late", lambda _req, resp: Trigger.Response(success=True, message="here")
         )
+        name = robot.ros2.name
+        await wait_for(lambda: server.knows_client(name, "/", "/late", action=False))
+        server.spin()
         assert (await call).message == "here"
 
 
@@ -83,6 +87,7 @@ async def test_a_cancelled_call_drops_its_request_and_the_client_still_works(
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server, "/slow", Trigger)
         call = asyncio.ensure_future(robot.ros2.call("/slow", Trigger.Request()))
         await entered.wait()
         call.cancel()
@@ -171,6 +176,7 @@ async def test_a_goal_is_an_action_whose_result_is_the_goals(
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal("/fibonacci", Fibonacci.Goal(order=10))
         assert handle.name == "goal /fibonacci"
         result = await handle
@@ -186,6 +192,7 @@ async def test_feedback_lands_in_the_state_while_the_goal_runs(
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal(
             "/fibonacci",
             Fibonacci.Goal(order=0),
@@ -204,6 +211,7 @@ async def test_cancelling_the_action_cancels_the_goal_and_waits_for_the_server(
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal(
             "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
         )
@@ -223,6 +231,7 @@ async def test_a_goal_still_running_at_shutdown_is_cancelled_on_the_server(
     attach_ros2(robot, "executive")
     async with asyncio.timeout(DEADLINE):
         async with robot:
+            await meet(robot, server.node, "/fibonacci", Fibonacci)
             handle = robot.ros2.goal(
                 "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
             )
@@ -239,6 +248,7 @@ async def test_a_refused_cancel_is_logged_and_the_action_still_ends_cancelled(
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal(
             "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
         )
@@ -258,6 +268,7 @@ async def test_a_rejected_goal_fails_clearly(server: FibonacciServer) -> None:
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal("/fibonacci", Fibonacci.Goal(order=99))
         with pytest.raises(GoalRejectedError) as caught:
             await handle
@@ -274,6 +285,7 @@ async def test_an_aborted_goal_fails_with_its_status(server: FibonacciServer) ->
     robot = Robot()
     attach_ros2(robot, "executive")
     async with robot, asyncio.timeout(DEADLINE):
+        await meet(robot, server.node, "/fibonacci", Fibonacci)
         with pytest.raises(GoalError) as caught:
             await robot.ros2.goal("/fibonacci", Fibonacci.Goal(order=13))
         assert caught.value.status == "aborted"

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import threading
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from ros2_support import DEADLINE, next_where, require_rclpy
+from ros2_support import DEADLINE, next_where, require_rclpy, wait_for
 
 require_rclpy()
 
@@ -29,9 +31,14 @@ if TYPE_CHECKING:
 InvalidHandle = rclpy_implementation.InvalidHandle
 
 
-def native_threads() -> int:
-    """Every thread of this process, Python's and DDS's (C++) alike."""
-    return len(os.listdir("/proc/self/task"))
+def native_threads() -> list[str]:
+    """The names of every thread of this process, Python's and DDS's (C++) alike."""
+    tasks = Path("/proc/self/task")
+    names = []
+    for task in tasks.iterdir():
+        with contextlib.suppress(FileNotFoundError):  # a thread that just ended
+            names.append((task / "comm").read_text().strip())
+    return sorted(names)
 
 
 async def run_once(name: str) -> tuple[set[threading.Thread], Any, Any]:
@@ -55,7 +62,8 @@ async def test_shutdown_leaves_no_thread_node_or_context() -> None:
     during, node, context = await run_once("executive")
     assert [t.name for t in during] == ["pyrobots_aio.ros2 executive"]
     assert set(threading.enumerate()) == python_before
-    assert native_threads() == native_before  # the DDS participant's threads are gone too
+    async with asyncio.timeout(DEADLINE):  # the DDS participant's threads end soon after
+        await wait_for(lambda: native_threads() == native_before)
     assert not context.ok()
     with pytest.raises(InvalidHandle, match="destruction was requested"):
         node.get_node_names()

@@ -64,16 +64,19 @@ async def test_to_state_as_a_function_and_as_a_key(plain: Callable[..., PlainNod
     robot = Robot()
     attach_ros2(robot, "executive", namespace="/robot1")
     async with robot, asyncio.timeout(DEADLINE):
-        robot.ros2.subscribe("cmd_vel", Twist, lambda m: {"speed": math.hypot(m.linear.x, 0.4)})
+        speed = robot.ros2.subscribe(
+            "cmd_vel", Twist, lambda m: {"speed": math.hypot(m.linear.x, 0.4)}
+        )
         whole = robot.ros2.subscribe("cmd_vel", Twist, "last_cmd")
         publisher, matched = teleop.publisher("/robot1/cmd_vel", Twist, subscribers=2)
         await matched.wait()
+        both = asyncio.gather(speed.wait_for_message(), whole.wait_for_message())
         publisher.publish(twist(0.3, 1.0))
-        message = await whole.wait_for_message()
+        _, message = await both
         assert whole.topic == "/robot1/cmd_vel"
         assert robot.state.last_cmd is message
         assert message.angular.z == 1.0
-        await robot.wait("speed", value=0.5)
+        assert robot.state.speed == pytest.approx(0.5)
 
 
 @pytest.mark.asyncio

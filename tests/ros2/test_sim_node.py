@@ -10,7 +10,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from ros2_support import DEADLINE, next_where, require_rclpy
+from ros2_support import DEADLINE, next_where, require_rclpy, wait_for
 
 require_rclpy()
 pytest.importorskip(
@@ -102,8 +102,9 @@ async def test_a_plain_rclpy_node_drives_the_sim_node_and_reads_its_sensors(
     cmd_vel, matched = teleop.publisher("/robot1/cmd_vel", Twist)
     async with asyncio.timeout(DEADLINE), sim_node("--namespace", "/robot1") as process:
         await matched.wait()
-        graph = dict(teleop.node.get_topic_names_and_types())
-        assert {f"/robot1/{k}": [v] for k, v in TOPICS.items()}.items() <= graph.items()
+        graph = teleop.node.get_topic_names_and_types
+        expected = {f"/robot1/{topic}": [kind] for topic, kind in TOPICS.items()}
+        await wait_for(lambda: all(dict(graph()).get(t) == k for t, k in expected.items()))
         first = await odometry.get()
         assert (first.header.frame_id, first.child_frame_id) == ("odom", "base_link")
         moved = await drive_until(

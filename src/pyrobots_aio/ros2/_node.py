@@ -286,10 +286,7 @@ class Ros2Node:
         if not isinstance(request, srv_type.Request):  # type: ignore[attr-defined]
             msg = f"{service!r} takes a {ros_name(srv_type)} request, got {request!r}"
             raise TypeError(msg)
-        full = str(thread.node.resolve_service_name(check_topic(service, "service name")))
-        client = self._clients.get((full, srv_type))
-        if client is None:
-            client = self._clients[full, srv_type] = thread.node.create_client(srv_type, full)
+        full, client = self._client(service, srv_type)
         return await call_service(thread, client, full, request)
 
     def goal(
@@ -324,18 +321,47 @@ class Ros2Node:
             if feedback_to_state is None
             else state_mapping(action_type.Feedback, feedback_to_state)  # type: ignore[attr-defined]
         )
-        full = str(thread.node.resolve_service_name(check_topic(action_name, "action name")))
-        client = self._clients.get((full, action_type))
-        if client is None:
-            client = rclpy_module("rclpy.action").ActionClient(thread.node, action_type, full)
-            self._clients[full, action_type] = client
+        full, client = self._client(action_name, action_type)
         assert self._robot is not None  # running
         act: Action[Robot, Any, Any] = Action(run_goal)
         act.name = f"goal {full}"
         feedback = feedback_writer(thread, self._robot, mapping)
         return act(self._robot, thread, client, action_name=full, goal=goal, feedback=feedback)
 
+    async def wait_for_server(self, name: str, interface: type) -> None:
+        """Return once the service or action server ``name`` of type ``interface`` is up.
+
+        `call` and `goal` wait for their server anyway; this lets a program
+        wait beforehand (under its own deadline), e.g. at start-up.
+
+        Example:
+            >>> async with asyncio.timeout(10):  # doctest: +SKIP
+            ...     await robot.ros2.wait_for_server("fibonacci", Fibonacci)
+        """
+        thread = self._running_thread()
+        _, client = self._client(name, interface)
+        is_action = hasattr(interface, "Goal")
+        await thread.wait_until(client.server_is_ready if is_action else client.service_is_ready)
+
     # -- internals ----------------------------------------------------------------
+
+    def _client(self, name: str, interface: type) -> tuple[str, Any]:
+        """The full name and the (one, cached) client of service or action ``name``."""
+        node = self._running_thread().node
+        is_action = hasattr(interface, "Goal")
+        if not (is_action or hasattr(interface, "Request")):
+            msg = f"{interface!r} is not a ROS 2 service or action type"
+            raise TypeError(msg)
+        kind = "action name" if is_action else "service name"
+        full = str(node.resolve_service_name(check_topic(name, kind)))
+        client = self._clients.get((full, interface))
+        if client is None:
+            if is_action:
+                client = rclpy_module("rclpy.action").ActionClient(node, interface, full)
+            else:
+                client = node.create_client(interface, full)
+            self._clients[full, interface] = client
+        return full, client
 
     def _running_thread(self) -> RosThread:
         if self._robot is None:
