@@ -21,6 +21,7 @@ LAYERS = {
     "robot": 4,
     "recording": 5,
     "sim": 5,
+    "ros2": 5,
     "testing": 5,
     "cli": 5,
 }

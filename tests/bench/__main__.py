@@ -34,6 +34,8 @@ GOALS: dict[str, tuple[str, Callable[[float], bool]]] = {
     "idle_cpu_s_per_s_1000_monitors": ("~0", lambda v: v <= 0.005),
     "random_walk_realtime_factor": (">= 100x", lambda v: v >= 100),
     "recording_throughput_ratio": ("<= 2x", lambda v: v <= 2),
+    "ros2_topic_to_callback_p99_ratio": ("<= 1.5x plain rclpy, p99", lambda v: v <= 1.5),
+    "ros2_publish_to_wire_p99_ratio": ("<= 1.5x plain rclpy, p99", lambda v: v <= 1.5),
 }
 
 
