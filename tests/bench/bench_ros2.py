@@ -30,21 +30,11 @@ import sys
 import threading
 import time
 
+from .bench_events import _p99, _stats
+
 LATENCY_N = 1_500
 PERIOD = 0.004  # seconds between two latency messages: 250 Hz, a fast sensor
 FLOOD_N = 20_000
-
-
-def _p99(samples: list[float]) -> float:
-    ordered = sorted(samples)
-    return ordered[int(0.99 * (len(ordered) - 1))]
-
-
-def _stats(prefix: str, samples_ns: list[float]) -> dict[str, float]:
-    return {
-        f"{prefix}_median_us": statistics.median(samples_ns) / 1e3,
-        f"{prefix}_p99_us": _p99(samples_ns) / 1e3,
-    }
 
 
 class _Plain:

@@ -26,6 +26,9 @@ if TYPE_CHECKING:
 
 from ros2_support import SKIP_REASON, PlainNode
 
+from pyrobots_aio import Robot
+from pyrobots_aio.ros2 import attach_ros2
+
 REQUIRE = "PYROBOTS_AIO_REQUIRE_ROS2"
 
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
@@ -48,15 +51,19 @@ def no_leaked_threads() -> Iterator[None]:
     """Every ROS 2 test ends with the Python threads it started with.
 
     Except the worker threads of a module's plain rclpy server (its
-    ``MultiThreadedExecutor`` starts them as work comes, and stops them with the server).
+    ``MultiThreadedExecutor`` starts them as work comes, and stops them with the server);
+    a thread still ending gets five seconds.
     """
     before = set(threading.enumerate())
     yield
     left = [
         t
         for t in threading.enumerate()
-        if t not in before and t.is_alive() and not t.name.startswith("ThreadPoolExecutor-")
+        if t not in before and not t.name.startswith("ThreadPoolExecutor-")
     ]
+    for thread in left:  # one that is ending (asyncio's waitpid thread of a child) ends now
+        thread.join(timeout=5.0)
+    left = [t for t in left if t.is_alive()]
     assert not left, f"threads outlived the test: {left}"
 
 
@@ -73,3 +80,11 @@ async def plain() -> AsyncIterator[Callable[..., PlainNode]]:
     yield make
     for node in made:
         node.close()
+
+
+@pytest.fixture
+def executive() -> Robot:
+    """A robot with a ROS 2 node named ``executive`` (not running yet)."""
+    robot = Robot()
+    attach_ros2(robot, "executive")
+    return robot

@@ -87,8 +87,8 @@ class PlainNode:
                 clients = get_action_client_names_and_types_by_node(self.node, node, namespace)
             else:
                 clients = self.node.get_client_names_and_types_by_node(node, namespace)
-        except rclpy_implementation.NodeNameNonExistentError:  # not discovered yet
-            return False
+        except (rclpy_implementation.NodeNameNonExistentError, rclpy_implementation.RCLError):
+            return False  # the node is not discovered yet
         return name in dict(clients)
 
     def to_loop(self, fn: Callable[..., object], *args: object) -> None:

@@ -18,6 +18,7 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 from test_msgs.action import Fibonacci  # noqa: E402
 
 from pyrobots_aio import (  # noqa: E402
+    ActionHandle,
     ActionInterrupted,
     GoalError,
     GoalRejectedError,
@@ -155,6 +156,16 @@ class FibonacciServer:
         return Fibonacci.Result(sequence=sequence)
 
 
+async def held_goal(robot: Robot, server: FibonacciServer) -> ActionHandle[Any]:
+    """A goal the server executes until released or cancelled, once its feedback is in."""
+    await meet(robot, server.node, "/fibonacci", Fibonacci)
+    handle = robot.ros2.goal(
+        "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
+    )
+    await robot.wait(lambda r: "fib" in r.state)  # the server is executing it
+    return handle
+
+
 @pytest.fixture(scope="module")
 def fibonacci_server() -> Iterator[FibonacciServer]:
     node = PlainNode("fibonacci_server", threads=4, loop=asyncio.new_event_loop())
@@ -171,11 +182,9 @@ def server(fibonacci_server: FibonacciServer) -> Iterator[FibonacciServer]:
 
 @pytest.mark.asyncio
 async def test_a_goal_is_an_action_whose_result_is_the_goals(
-    server: FibonacciServer,
+    server: FibonacciServer, executive: Robot
 ) -> None:
-    robot = Robot()
-    attach_ros2(robot, "executive")
-    async with robot, asyncio.timeout(DEADLINE):
+    async with executive as robot, asyncio.timeout(DEADLINE):
         await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal("/fibonacci", Fibonacci.Goal(order=10))
         assert handle.name == "goal /fibonacci"
@@ -187,18 +196,11 @@ async def test_a_goal_is_an_action_whose_result_is_the_goals(
 
 @pytest.mark.asyncio
 async def test_feedback_lands_in_the_state_while_the_goal_runs(
-    server: FibonacciServer,
+    server: FibonacciServer, executive: Robot
 ) -> None:
-    robot = Robot()
-    attach_ros2(robot, "executive")
-    async with robot, asyncio.timeout(DEADLINE):
-        await meet(robot, server.node, "/fibonacci", Fibonacci)
-        handle = robot.ros2.goal(
-            "/fibonacci",
-            Fibonacci.Goal(order=0),
-            feedback_to_state=lambda fb: {"fib_last": fb.sequence[-1]},
-        )
-        await robot.wait(lambda r: r.state.get("fib_last") == -1)
+    async with executive as robot, asyncio.timeout(DEADLINE):
+        handle = await held_goal(robot, server)
+        assert list(robot.state.fib) == [-1]
         assert not handle.done()
         server.release.set()
         assert list((await handle).sequence) == [42]
@@ -206,16 +208,10 @@ async def test_feedback_lands_in_the_state_while_the_goal_runs(
 
 @pytest.mark.asyncio
 async def test_cancelling_the_action_cancels_the_goal_and_waits_for_the_server(
-    server: FibonacciServer,
+    server: FibonacciServer, executive: Robot
 ) -> None:
-    robot = Robot()
-    attach_ros2(robot, "executive")
-    async with robot, asyncio.timeout(DEADLINE):
-        await meet(robot, server.node, "/fibonacci", Fibonacci)
-        handle = robot.ros2.goal(
-            "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
-        )
-        await robot.wait(lambda r: "fib" in r.state)  # the server is executing it
+    async with executive as robot, asyncio.timeout(DEADLINE):
+        handle = await held_goal(robot, server)
         assert handle.cancel("bumped")
         assert await handle.wait_done() is Outcome.CANCELLED
         assert server.ended == ["canceled"]  # the server's answer came before the action ended
@@ -225,34 +221,22 @@ async def test_cancelling_the_action_cancels_the_goal_and_waits_for_the_server(
 
 @pytest.mark.asyncio
 async def test_a_goal_still_running_at_shutdown_is_cancelled_on_the_server(
-    server: FibonacciServer,
+    server: FibonacciServer, executive: Robot
 ) -> None:
-    robot = Robot()
-    attach_ros2(robot, "executive")
     async with asyncio.timeout(DEADLINE):
-        async with robot:
-            await meet(robot, server.node, "/fibonacci", Fibonacci)
-            handle = robot.ros2.goal(
-                "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
-            )
-            await robot.wait(lambda r: "fib" in r.state)
+        async with executive as robot:
+            handle = await held_goal(robot, server)
         assert handle.outcome is Outcome.CANCELLED
         assert server.ended == ["canceled"]
 
 
 @pytest.mark.asyncio
 async def test_a_refused_cancel_is_logged_and_the_action_still_ends_cancelled(
-    server: FibonacciServer, caplog: pytest.LogCaptureFixture
+    server: FibonacciServer, executive: Robot, caplog: pytest.LogCaptureFixture
 ) -> None:
     server.reset(refuse_cancel=True)
-    robot = Robot()
-    attach_ros2(robot, "executive")
-    async with robot, asyncio.timeout(DEADLINE):
-        await meet(robot, server.node, "/fibonacci", Fibonacci)
-        handle = robot.ros2.goal(
-            "/fibonacci", Fibonacci.Goal(order=0), feedback_to_state={"fib": "sequence"}
-        )
-        await robot.wait(lambda r: "fib" in r.state)
+    async with executive as robot, asyncio.timeout(DEADLINE):
+        handle = await held_goal(robot, server)
         handle.cancel()
         assert await handle.wait_done() is Outcome.CANCELLED
         server.release.set()  # the server's goal went on; let it finish
@@ -264,10 +248,8 @@ async def test_a_refused_cancel_is_logged_and_the_action_still_ends_cancelled(
 
 
 @pytest.mark.asyncio
-async def test_a_rejected_goal_fails_clearly(server: FibonacciServer) -> None:
-    robot = Robot()
-    attach_ros2(robot, "executive")
-    async with robot, asyncio.timeout(DEADLINE):
+async def test_a_rejected_goal_fails_clearly(server: FibonacciServer, executive: Robot) -> None:
+    async with executive as robot, asyncio.timeout(DEADLINE):
         await meet(robot, server.node, "/fibonacci", Fibonacci)
         handle = robot.ros2.goal("/fibonacci", Fibonacci.Goal(order=99))
         with pytest.raises(GoalRejectedError) as caught:
@@ -281,10 +263,10 @@ async def test_a_rejected_goal_fails_clearly(server: FibonacciServer) -> None:
 
 
 @pytest.mark.asyncio
-async def test_an_aborted_goal_fails_with_its_status(server: FibonacciServer) -> None:
-    robot = Robot()
-    attach_ros2(robot, "executive")
-    async with robot, asyncio.timeout(DEADLINE):
+async def test_an_aborted_goal_fails_with_its_status(
+    server: FibonacciServer, executive: Robot
+) -> None:
+    async with executive as robot, asyncio.timeout(DEADLINE):
         await meet(robot, server.node, "/fibonacci", Fibonacci)
         with pytest.raises(GoalError) as caught:
             await robot.ros2.goal("/fibonacci", Fibonacci.Goal(order=13))

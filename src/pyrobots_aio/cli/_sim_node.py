@@ -50,8 +50,6 @@ from typing import TYPE_CHECKING, Any, TextIO
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
-    from _typeshed import FileDescriptorLike
-
     from pyrobots_aio.ros2 import Ros2Node
     from pyrobots_aio.sim import SimRobot
 
@@ -109,33 +107,15 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     node.set_defaults(command=run_sim_node)
 
 
-class _ScaledSelector(selectors.BaseSelector):
-    """Wraps a real selector: a wait of ``t`` loop seconds lasts ``t / rate`` real seconds."""
+class _ScaledSelector(selectors.DefaultSelector):
+    """The platform's selector, where a wait of ``t`` loop seconds lasts ``t / rate`` real ones."""
 
-    def __init__(self, inner: selectors.BaseSelector, rate: float) -> None:
-        self._inner, self._rate = inner, rate
+    def __init__(self, rate: float) -> None:
+        super().__init__()
+        self._rate = rate
 
     def select(self, timeout: float | None = None) -> _SelectResult:
-        return self._inner.select(None if timeout is None else timeout / self._rate)
-
-    def register(
-        self, fileobj: FileDescriptorLike, events: int, data: Any = None
-    ) -> selectors.SelectorKey:
-        return self._inner.register(fileobj, events, data)
-
-    def unregister(self, fileobj: FileDescriptorLike) -> selectors.SelectorKey:
-        return self._inner.unregister(fileobj)
-
-    def modify(
-        self, fileobj: FileDescriptorLike, events: int, data: Any = None
-    ) -> selectors.SelectorKey:
-        return self._inner.modify(fileobj, events, data)
-
-    def get_map(self) -> Mapping[FileDescriptorLike, selectors.SelectorKey]:
-        return self._inner.get_map()
-
-    def close(self) -> None:
-        self._inner.close()
+        return super().select(None if timeout is None else timeout / self._rate)
 
 
 class ScaledTimeLoop(asyncio.SelectorEventLoop):
@@ -148,7 +128,7 @@ class ScaledTimeLoop(asyncio.SelectorEventLoop):
     def __init__(self, rate: float) -> None:
         self._rate = rate
         self._origin = time.monotonic()
-        super().__init__(_ScaledSelector(selectors.DefaultSelector(), rate))
+        super().__init__(_ScaledSelector(rate))
 
     def time(self) -> float:
         """Simulated seconds since the loop was made."""

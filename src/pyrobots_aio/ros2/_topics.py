@@ -130,7 +130,32 @@ class Matches:
                 future.set_exception(error)
 
 
-class Ros2Subscription:
+class _Endpoint:
+    """What a subscription and a publisher share: names, matches, closing."""
+
+    def __init__(self, thread: RosThread, topic: str, msg_type: type) -> None:
+        self.topic, self.msg_type = topic, msg_type
+        self.matches = Matches()
+        self._thread = thread
+        self._closed = False
+
+    def _on_matched(self, info: Any) -> None:  # on the ROS thread
+        self._thread.to_loop(self.matches.update, info.current_count)
+
+    def _close(self, destroy: str, entity: Any, what: str) -> Ros2Error | None:
+        """Destroy ``entity`` (``node.<destroy>(entity)``); the error waiters get, or None."""
+        if self._closed:
+            return None
+        self._closed = True
+        node = self._thread.node
+        if node is not None:
+            getattr(node, destroy)(entity)
+        error = Ros2Error(f"the {what} {self.topic!r} is closed")
+        self.matches.fail(error)
+        return error
+
+
+class Ros2Subscription(_Endpoint):
     """A topic feeding ``robot.state`` (made by `Ros2Node.subscribe`).
 
     Attributes:
@@ -152,17 +177,15 @@ class Ros2Subscription:
         callback: Callable[[Any], object] | None,
         qos: Any,
     ) -> None:
-        self.topic, self.msg_type = topic, msg_type
+        super().__init__(thread, topic, msg_type)
         self.received = self.dropped = 0
         self.keys: set[str] = set()
-        self.matches = Matches()
-        self._thread, self._robot = thread, robot
+        self._robot = robot
         self._mapping, self._callback = mapping, callback
         self._inbox: deque[Any] = deque()
         self._depth = max(1, qos.depth)
         self._lock = threading.Lock()
         self._scheduled = False
-        self._closed = False
         self._next: list[asyncio.Future[Any]] = []
         events = rclpy_module("rclpy.event_handler").SubscriptionEventCallbacks(
             matched=self._on_matched
@@ -200,14 +223,9 @@ class Ros2Subscription:
 
     def close(self) -> None:
         """Stop receiving; messages already queued are dropped."""
-        if self._closed:
+        error = self._close("destroy_subscription", self._sub, "subscription to")
+        if error is None:
             return
-        self._closed = True
-        node = self._thread.node
-        if node is not None:
-            node.destroy_subscription(self._sub)
-        error = Ros2Error(f"the subscription to {self.topic!r} is closed")
-        self.matches.fail(error)
         for future in self._next:
             if not future.done():
                 future.set_exception(error)
@@ -224,9 +242,6 @@ class Ros2Subscription:
                 return
             self._scheduled = True
         self._thread.to_loop(self._drain)
-
-    def _on_matched(self, info: Any) -> None:
-        self._thread.to_loop(self.matches.update, info.current_count)
 
     # -- on the loop ----------------------------------------------------------------
 
@@ -263,7 +278,7 @@ class Ros2Subscription:
         return f"<Ros2Subscription {self.topic} {ros_name(self.msg_type)} {state}>"
 
 
-class Ros2Publisher(Generic[M]):
+class Ros2Publisher(_Endpoint, Generic[M]):
     """A publisher on a topic (made by `Ros2Node.publisher`); ``publish`` never blocks.
 
     Attributes:
@@ -271,11 +286,10 @@ class Ros2Publisher(Generic[M]):
         msg_type: The message class.
     """
 
+    msg_type: type[M]
+
     def __init__(self, thread: RosThread, topic: str, msg_type: type[M], qos: Any) -> None:
-        self.topic, self.msg_type = topic, msg_type
-        self.matches = Matches()
-        self._thread = thread
-        self._closed = False
+        super().__init__(thread, topic, msg_type)
         events = rclpy_module("rclpy.event_handler").PublisherEventCallbacks(
             matched=self._on_matched
         )
@@ -314,16 +328,7 @@ class Ros2Publisher(Generic[M]):
 
     def close(self) -> None:
         """Stop publishing; `publish` raises from now on."""
-        if self._closed:
-            return
-        self._closed = True
-        node = self._thread.node
-        if node is not None:
-            node.destroy_publisher(self._pub)
-        self.matches.fail(Ros2Error(f"the publisher on {self.topic!r} is closed"))
-
-    def _on_matched(self, info: Any) -> None:
-        self._thread.to_loop(self.matches.update, info.current_count)
+        self._close("destroy_publisher", self._pub, "publisher on")
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else f"{self.subscribers} subscribers"
