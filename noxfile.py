@@ -1,14 +1,16 @@
-"""The one entry point for checks: `nox` runs lint, typecheck, tests and examples."""
+"""The one entry point for checks: `nox` runs lint, typecheck, tests, examples and ros2."""
 
 from __future__ import annotations
 
 import nox
 
 nox.options.default_venv_backend = "uv|venv"
-nox.options.sessions = ["lint", "typecheck", "tests", "examples"]
+nox.options.sessions = ["lint", "typecheck", "tests", "examples", "ros2"]
 nox.options.reuse_existing_virtualenvs = True
 
 INSTALL = ".[sim,mcap,live,test]"
+ROS2_INSTALL = ".[sim,ros2,test]"
+ROS2_TEST_INTERFACES = ("ros-test-msgs>=2.3", "ros-std-srvs>=5.5")  # the tests' own servers
 
 
 @nox.session
@@ -44,7 +46,16 @@ def examples(session: nox.Session) -> None:
 
 
 @nox.session
+def ros2(session: nox.Session) -> None:
+    """The ROS 2 tests on the ROS 2 Python wheels (real DDS on localhost); none may skip."""
+    session.install("-e", ROS2_INSTALL, *ROS2_TEST_INTERFACES)
+    env = {"PYROBOTS_AIO_REQUIRE_ROS2": "1", "MUJOCO_GL": "egl"}
+    session.run("pytest", "tests/ros2", *session.posargs, env=env)
+
+
+@nox.session
 def bench(session: nox.Session) -> None:
     """Benchmarks: print a table and write bench-results.json."""
-    session.install("-e", INSTALL, "py_trees>=2.2")  # py_trees: the side-by-side comparison
+    # py_trees: the side-by-side comparison; the ros2 extra: bench_ros2's bridge and rclpy
+    session.install("-e", ".[sim,mcap,live,test,ros2]", "py_trees>=2.2")
     session.run("python", "-m", "tests.bench", *session.posargs)

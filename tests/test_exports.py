@@ -16,6 +16,7 @@ PUBLIC = [
     "pyrobots_aio.poses",
     "pyrobots_aio.resources",
     "pyrobots_aio.robot",
+    "pyrobots_aio.ros2",
     "pyrobots_aio.sim",
     "pyrobots_aio.state",
     "pyrobots_aio.testing",

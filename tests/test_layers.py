@@ -22,6 +22,7 @@ LAYERS = {
     "motion": 4.5,
     "recording": 5,
     "sim": 5,
+    "ros2": 5,
     "testing": 5,
     "cli": 5,
 }

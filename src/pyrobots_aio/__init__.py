@@ -7,7 +7,7 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 3. ``actions``, ``events``
 4. ``robot`` (the composition root)
 5. ``motion`` (`DriveBase`: the motion actions, over any base)
-6. ``recording``, ``sim``, ``testing``, ``cli`` (public API only)
+6. ``recording``, ``sim``, ``ros2``, ``testing``, ``cli`` (public API only)
 """
 
 from ._core._instrument import EventKind as EventKind
@@ -21,6 +21,8 @@ from ._exceptions import ActionInterrupted as ActionInterrupted
 from ._exceptions import ActionSkipped as ActionSkipped
 from ._exceptions import CorruptRecordingError as CorruptRecordingError
 from ._exceptions import EventLoopError as EventLoopError
+from ._exceptions import GoalError as GoalError
+from ._exceptions import GoalRejectedError as GoalRejectedError
 from ._exceptions import InvalidConditionError as InvalidConditionError
 from ._exceptions import InvalidPoseError as InvalidPoseError
 from ._exceptions import InvalidResourceError as InvalidResourceError
@@ -33,10 +35,14 @@ from ._exceptions import PyRobotsError as PyRobotsError
 from ._exceptions import RecordingError as RecordingError
 from ._exceptions import ResourceError as ResourceError
 from ._exceptions import RobotNotRunningError as RobotNotRunningError
+from ._exceptions import Ros2Error as Ros2Error
+from ._exceptions import Ros2NameError as Ros2NameError
+from ._exceptions import Ros2UnavailableError as Ros2UnavailableError
 from ._exceptions import SimulationError as SimulationError
 from ._exceptions import SimulationUnavailableError as SimulationUnavailableError
 from ._exceptions import StateError as StateError
 from ._exceptions import TooManyActions as TooManyActions
+from ._exceptions import TopicTypeError as TopicTypeError
 from ._exceptions import UnknownFrameError as UnknownFrameError
 from ._exceptions import UnknownStateKeyError as UnknownStateKeyError
 from .actions import Action as Action
@@ -90,6 +96,8 @@ __all__ = [
     "FrameProvider",
     "FrameTree",
     "GenericRobot",
+    "GoalError",
+    "GoalRejectedError",
     "Instrument",
     "InvalidConditionError",
     "InvalidPoseError",
@@ -110,12 +118,16 @@ __all__ = [
     "ResourceManager",
     "Robot",
     "RobotNotRunningError",
+    "Ros2Error",
+    "Ros2NameError",
+    "Ros2UnavailableError",
     "SimulationError",
     "SimulationUnavailableError",
     "StateError",
     "StateSample",
     "StateStore",
     "TooManyActions",
+    "TopicTypeError",
     "UnknownFrameError",
     "UnknownStateKeyError",
     "action",

@@ -26,8 +26,14 @@ PyRobotsError
 │   ├── ModelLoadError            an MJCF file that does not load
 │   └── LockstepError             a lockstep robot outside the lockstep loop
 ├── MotionError                   a motion action that cannot do its job (docking failed)
-└── RecordingError
-    └── CorruptRecordingError     a recording line that cannot be read (.line)
+├── RecordingError
+│   └── CorruptRecordingError     a recording line that cannot be read (.line)
+└── Ros2Error
+    ├── Ros2UnavailableError      rclpy is not installed (also an ImportError)
+    ├── Ros2NameError             a name ROS 2 rejects, with its reason (also a ValueError)
+    ├── TopicTypeError            a topic that carries another type (also a TypeError)
+    └── GoalError                 a ROS 2 goal that did not succeed (.status)
+        └── GoalRejectedError     the action server refused the goal
 ```
 
 `ActionCancelled` is not in this tree: it *is* `asyncio.CancelledError`
@@ -240,3 +246,37 @@ class CorruptRecordingError(RecordingError):
         self.path = path
         self.line = line
         super().__init__(f"{path}:{line}: {problem}")
+
+
+class Ros2Error(PyRobotsError):
+    """Errors of the ROS 2 bridge (`pyrobots_aio.ros2`)."""
+
+
+class Ros2UnavailableError(Ros2Error, ImportError):
+    """rclpy cannot be imported; install the ``ros2`` extra or source a ROS 2 install."""
+
+
+class Ros2NameError(Ros2Error, ValueError):
+    """A node name, namespace, topic or service name that ROS 2 rejects (its reason quoted)."""
+
+
+class TopicTypeError(Ros2Error, TypeError):
+    """A topic used with a message type other than the one it carries; both are named."""
+
+
+class GoalError(Ros2Error):
+    """A ROS 2 action goal that did not succeed.
+
+    Attributes:
+        action: The action's name (e.g. ``/fibonacci``).
+        status: How it ended: ``"rejected"``, ``"aborted"`` or ``"canceled"``.
+    """
+
+    def __init__(self, action: str, status: str, message: str) -> None:
+        self.action = action
+        self.status = status
+        super().__init__(message)
+
+
+class GoalRejectedError(GoalError):
+    """The action server refused the goal."""

@@ -13,7 +13,7 @@ import traceback
 
 from pyrobots_aio import PyRobotsError, __version__
 
-from . import _demo, _replay
+from . import _demo, _replay, _sim_node
 from ._console import install_console_handler
 
 INTERRUPTED = 130
@@ -23,7 +23,8 @@ def parser() -> argparse.ArgumentParser:
     """The command's argument parser."""
     top = argparse.ArgumentParser(
         prog="pyrobots-aio",
-        description="pyrobots_aio: run the demo robot, replay recordings.",
+        description="pyrobots_aio: run the demo robot, replay recordings, serve the "
+        "simulated robot over ROS 2.",
     )
     top.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     loud = top.add_mutually_exclusive_group()
@@ -38,6 +39,7 @@ def parser() -> argparse.ArgumentParser:
     )
     demos = demo.add_subparsers(title="demos", metavar="DEMO", required=True)
     _demo.add_parser(demos)
+    _sim_node.add_parser(commands)
     return top
 
 

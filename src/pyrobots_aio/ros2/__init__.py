@@ -1,0 +1,40 @@
+"""The robot over ROS 2: a node per robot, topics into ``robot.state``, services, goals.
+
+Needs the ``ros2`` extra (``pip install "pyrobots-aio[ros2]"``: the ROS 2
+Python wheels, Fast DDS included) or a sourced ROS 2 install; this module
+imports without them, and creating a node says what to install.
+
+``attach_ros2(robot)`` gives any robot a `Ros2Node` as ``robot.ros2``,
+running inside ``async with robot``:
+
+- ``robot.ros2.subscribe(topic, msg_type, to_state=...)`` writes every
+  message into ``robot.state`` (a key, a field map, or a function);
+- ``robot.ros2.publisher(topic, msg_type)`` publishes;
+- ``await robot.ros2.call(service, request)`` calls a service (cancellable);
+- ``robot.ros2.goal(action, goal)`` runs a ROS 2 action goal as a
+  pyrobots_aio action: cancelling it cancels the goal, feedback goes to the
+  state, the goal's result is the action's result;
+- ``/diagnostics`` reports whether the watched state is fresh.
+
+Layer: beside ``sim``, on the public API only.
+"""
+
+from ._diagnostics import staleness as staleness
+from ._node import Ros2Node as Ros2Node
+from ._node import attach_ros2 as attach_ros2
+from ._rclpy import qos_profile as qos_profile
+from ._rclpy import ros_name as ros_name
+from ._topics import Ros2Publisher as Ros2Publisher
+from ._topics import Ros2Subscription as Ros2Subscription
+from ._topics import ToState as ToState
+
+__all__ = [
+    "Ros2Node",
+    "Ros2Publisher",
+    "Ros2Subscription",
+    "ToState",
+    "attach_ros2",
+    "qos_profile",
+    "ros_name",
+    "staleness",
+]

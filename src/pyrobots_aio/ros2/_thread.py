@@ -1,0 +1,270 @@
+"""One rclpy context, node and executor, spinning on a thread of their own.
+
+rclpy 9 has no asyncio executor, so the bridge runs rclpy's
+``SingleThreadedExecutor`` on a dedicated thread and hands everything that
+arrives there (messages, service responses, goal results) to the event loop
+with ``loop.call_soon_threadsafe``: the loop never polls and never blocks on
+rclpy. The thread creates the context and node itself (a DDS participant
+takes tens of milliseconds to come up) and tears them down when the
+executor stops, so `RosThread.stop` leaves no thread, node or context behind.
+
+Each node has its own context (never rclpy's global default one): two robots
+in one process, or two tests in a row, share nothing, and neither installs
+rclpy's signal handlers.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+from typing import TYPE_CHECKING, Any
+
+from .._exceptions import Ros2Error
+from ._rclpy import rclpy_module
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+_log = logging.getLogger("pyrobots_aio.ros2")
+
+RECHECK_PERIOD = 0.05
+"""Seconds between two looks at the ROS graph while something waits for a server.
+
+rclpy tells nobody when a service or action server appears (its own
+``wait_for_service`` sleeps and looks again), so the ROS thread looks on a
+steady-clock timer, only while a call or a goal waits for its server.
+"""
+
+
+def _settle(
+    future: asyncio.Future[Any], result: Any = None, error: BaseException | None = None
+) -> None:
+    if future.done():
+        return
+    if error is not None:
+        future.set_exception(error)
+    else:
+        future.set_result(result)
+
+
+def _fail_quietly(future: asyncio.Future[Any], error: BaseException) -> None:
+    """Fail ``future``; whoever awaits it gets ``error``, and nobody is told if nobody does."""
+    if not future.done():
+        future.set_exception(error)
+        future.exception()  # retrieved: a future nobody awaits any more is not reported
+
+
+class RosThread:
+    """An rclpy node spinning on its own thread, handing its work to the event loop.
+
+    Args:
+        name: The node's name (already validated).
+        namespace: Its absolute namespace (already validated).
+        domain_id: The DDS domain; None reads ``ROS_DOMAIN_ID`` (0 if unset).
+        use_sim_time: Whether the node's clock follows ``/clock``.
+        ros_args: Extra ROS arguments for the node (``["-r", "from:=to"]`` ...).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        namespace: str,
+        *,
+        domain_id: int | None,
+        use_sim_time: bool,
+        ros_args: list[str],
+    ) -> None:
+        self.name, self.namespace = name, namespace
+        self.domain_id = domain_id
+        self.use_sim_time = use_sim_time
+        self.ros_args = ros_args
+        self.node: Any = None
+        self._context: Any = None
+        self._executor: Any = None
+        self._thread: threading.Thread | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stopped: asyncio.Future[None] | None = None
+        self._pending: set[asyncio.Future[Any]] = set()
+        self._waiters: list[tuple[Callable[[], bool], asyncio.Future[None]]] = []
+        self._lock = threading.Lock()  # guards the waiters, the recheck timer and stopping
+        self._stopping = False
+        self._recheck: Any = None
+
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop:
+        """The event loop the ROS thread hands its work to."""
+        if self._loop is None:
+            msg = "the ROS 2 node is not running; use it inside 'async with robot:'"
+            raise Ros2Error(msg)
+        return self._loop
+
+    # -- lifecycle ----------------------------------------------------------------
+
+    async def start(self) -> None:
+        """Create the context and node on a new thread and start spinning; return once up."""
+        rclpy_module()  # fail here, on the loop, if rclpy is missing
+        loop = self._loop = asyncio.get_running_loop()
+        ready: asyncio.Future[None] = loop.create_future()
+        self._stopped = loop.create_future()
+        self._thread = threading.Thread(
+            target=self._run, args=(ready,), name=f"pyrobots_aio.ros2 {self.name}", daemon=True
+        )
+        self._thread.start()
+        try:
+            await asyncio.shield(ready)
+        except asyncio.CancelledError:
+            await self.stop()
+            raise
+        except BaseException:
+            await self._joined()
+            raise
+
+    async def stop(self) -> None:
+        """Stop spinning, destroy the node and context, end the thread; fail what still waits."""
+        if self._thread is None:
+            return
+        with self._lock:
+            self._stopping = True
+            executor = self._executor
+        if executor is not None:  # else the thread sees `_stopping` before it spins
+            executor.shutdown(timeout_sec=0)
+        await self._joined()
+        error = Ros2Error(f"the ROS 2 node {self.name!r} stopped")
+        for future in list(self._pending):
+            _fail_quietly(future, error)
+        with self._lock:
+            waiters, self._waiters = self._waiters, []
+        for _, waiter in waiters:
+            _fail_quietly(waiter, error)
+
+    async def _joined(self) -> None:
+        """Wait for the thread to finish its teardown (shielded: it is quick and must end)."""
+        thread, stopped = self._thread, self._stopped
+        if thread is None or stopped is None:
+            return
+        try:
+            await asyncio.shield(stopped)
+        finally:
+            thread.join()
+            self._thread = None
+
+    def _run(self, ready: asyncio.Future[None]) -> None:
+        try:
+            executor = self._create()
+        except BaseException as exc:  # handed to start(), which raises it
+            self._destroy()
+            self.to_loop(_settle, ready, None, exc)
+            self.to_loop(_settle, self._stopped, None)
+            return
+        with self._lock:
+            stopping = self._stopping
+            self._executor = executor
+        self.to_loop(_settle, ready, None)
+        try:
+            if not stopping:
+                self._spin(executor)
+        finally:
+            self._destroy()
+            self.to_loop(_settle, self._stopped, None)
+
+    def _spin(self, executor: Any) -> None:
+        """``executor.spin()``, except that a callback that raises does not stop the node."""
+        while executor.context.ok() and not executor._is_shutdown:  # as rclpy's spin() loops
+            try:
+                executor.spin_once()
+            except Exception:  # rclpy re-raises a callback's error here: log it, go on
+                _log.exception("a ROS 2 callback of node %s failed", self.name)
+
+    def _create(self) -> Any:
+        rclpy_node = rclpy_module("rclpy.node")
+        executors = rclpy_module("rclpy.executors")
+        parameter = rclpy_module("rclpy.parameter")
+        context = self._context = rclpy_module("rclpy.context").Context()
+        # No process-wide logging set-up (rcl would write log files under ~/.ros).
+        context.init(args=[], domain_id=self.domain_id, initialize_logging=False)
+        self.node = rclpy_node.Node(
+            self.name,
+            namespace=self.namespace,
+            context=context,
+            cli_args=["--ros-args", *self.ros_args] if self.ros_args else None,
+            use_global_arguments=False,
+            enable_rosout=False,
+            start_parameter_services=False,
+            parameter_overrides=[parameter.Parameter("use_sim_time", value=self.use_sim_time)],
+        )
+        executor = executors.SingleThreadedExecutor(context=context)
+        executor.add_node(self.node)
+        return executor
+
+    def _destroy(self) -> None:
+        with self._lock:
+            executor, self._executor = self._executor, None
+        if executor is not None:
+            executor.shutdown(timeout_sec=0)
+        if self.node is not None:
+            self.node.destroy_node()
+        if self._context is not None:
+            self._context.try_shutdown()
+        self.node = self._context = self._recheck = None
+
+    # -- handing work over --------------------------------------------------------
+
+    def to_loop(self, fn: Callable[..., object], *args: object) -> None:
+        """From the ROS thread: run ``fn(*args)`` on the event loop, soon."""
+        loop = self._loop
+        if loop is None:
+            return
+        try:
+            loop.call_soon_threadsafe(fn, *args)
+        except RuntimeError:  # the loop is closed: nobody is left to tell
+            _log.debug("dropped %r: the event loop is closed", fn)
+
+    def wrap(self, rclpy_future: Any) -> asyncio.Future[Any]:
+        """An asyncio future settled, on the loop, with what ``rclpy_future`` settles with."""
+        future: asyncio.Future[Any] = self.loop.create_future()
+        self._pending.add(future)
+        future.add_done_callback(self._pending.discard)
+
+        def done(settled: Any) -> None:  # on the ROS thread (or here, if already done)
+            error = settled.exception()
+            self.to_loop(_settle, future, None if error else settled.result(), error)
+
+        rclpy_future.add_done_callback(done)
+        return future
+
+    async def wait_until(self, ready: Callable[[], bool]) -> None:
+        """Return once ``ready()`` (a look at the ROS graph) holds; re-checked on the ROS thread."""
+        if ready():
+            return
+        future: asyncio.Future[None] = self.loop.create_future()
+        with self._lock:
+            self._waiters.append((ready, future))
+            if self._recheck is None:
+                clock = rclpy_module("rclpy.clock")
+                steady = clock.Clock(clock_type=clock.ClockType.STEADY_TIME)
+                self._recheck = self.node.create_timer(RECHECK_PERIOD, self._check, clock=steady)
+            else:
+                self._recheck.reset()
+        try:
+            await future
+        finally:
+            with self._lock:
+                self._waiters = [(r, f) for r, f in self._waiters if f is not future]
+
+    def _check(self) -> None:  # on the ROS thread, from the timer
+        with self._lock:
+            waiters = list(self._waiters)
+        settled: dict[asyncio.Future[None], BaseException | None] = {}
+        for ready, future in waiters:
+            try:
+                if ready():
+                    settled[future] = None
+            except Exception as exc:  # handed to the waiter
+                settled[future] = exc
+        with self._lock:  # decided under the lock: a waiter added meanwhile restarts the timer
+            self._waiters = [(r, f) for r, f in self._waiters if f not in settled]
+            if not self._waiters and self._recheck is not None:
+                self._recheck.cancel()
+        for future, error in settled.items():
+            self.to_loop(_settle, future, None, error)

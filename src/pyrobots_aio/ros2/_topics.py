@@ -1,0 +1,335 @@
+"""Topics: subscriptions that write ``robot.state``, and publishers.
+
+A message reaches the loop without polling: rclpy's callback (on the ROS
+thread) puts it in the subscription's inbox and, if the inbox was empty,
+schedules one drain with ``call_soon_threadsafe``; the drain writes every
+queued message to the state, in order, each as one batch. The inbox holds at
+most the QoS history depth: if the loop falls that far behind, the oldest
+messages are dropped (and counted), as a ROS 2 ``KEEP_LAST`` queue would.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+import logging
+import operator
+import threading
+from collections import deque
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from .._exceptions import Ros2Error, TopicTypeError
+from ._rclpy import rclpy_module, ros_name
+
+if TYPE_CHECKING:
+    from ..robot import Robot
+    from ._thread import RosThread
+
+_log = logging.getLogger("pyrobots_aio.ros2")
+
+M = TypeVar("M")
+
+ToState = str | Mapping[str, str] | Callable[[Any], Mapping[str, object] | None]
+"""How a message becomes state: a key (whole message), ``{key: "field.path"}``, or a function."""
+
+
+def _fields(message: object) -> list[str]:
+    describe = getattr(type(message), "get_fields_and_field_types", None)
+    return sorted(describe()) if describe is not None else []
+
+
+def _check_path(msg_type: type, path: object) -> Callable[[Any], object]:
+    if not isinstance(path, str) or not path:
+        msg = f"a field path must be a dotted string such as 'pose.pose.position.x', got {path!r}"
+        raise TypeError(msg)
+    value: object = msg_type()
+    for depth, part in enumerate(path.split(".")):
+        fields = _fields(value)
+        if part not in fields:
+            where = ".".join(path.split(".")[:depth]) or ros_name(msg_type)
+            msg = f"{ros_name(msg_type)} has no field {path!r}: {where} has fields {fields}"
+            raise ValueError(msg)
+        value = getattr(value, part)
+    return operator.attrgetter(path)
+
+
+def state_mapping(
+    msg_type: type, to_state: ToState
+) -> Callable[[Any], Mapping[str, object] | None]:
+    """A function from a message to the state values it writes; field paths checked now.
+
+    Raises:
+        ValueError: A field path names no field of ``msg_type``.
+        TypeError: ``to_state`` is none of the three forms.
+    """
+    if isinstance(to_state, str):
+        key = to_state
+        return lambda message: {key: message}
+    if isinstance(to_state, Mapping):
+        getters = {key: _check_path(msg_type, path) for key, path in to_state.items()}
+        if not getters or not all(isinstance(key, str) for key in getters):
+            msg = f"a field map needs state keys (strings) mapped to field paths, got {to_state!r}"
+            raise TypeError(msg)
+        return lambda message: {key: get(message) for key, get in getters.items()}
+    if callable(to_state) and not inspect.iscoroutinefunction(to_state):
+        return to_state
+    msg = (
+        "to_state must be a state key, a {state_key: 'field.path'} map or a plain function "
+        f"of the message returning {{key: value}}, got {to_state!r}"
+    )
+    raise TypeError(msg)
+
+
+def check_topic_type(node: Any, topic: str, msg_type: type, verb: str) -> None:
+    """Raise `TopicTypeError` if the ROS graph already shows ``topic`` with another type."""
+    ours = ros_name(msg_type)
+    for name, types in node.get_topic_names_and_types():
+        theirs = [t for t in types if t != ours]
+        if name == topic and theirs:
+            msg = (
+                f"cannot {verb} {topic!r} as {ours}: the topic carries {', '.join(theirs)}; "
+                f"use that type, or another topic"
+            )
+            raise TopicTypeError(msg)
+
+
+class Matches:
+    """How many endpoints match a publisher or subscription; waitable (fed by DDS events)."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self._waiters: list[tuple[int, asyncio.Future[int]]] = []
+
+    def update(self, count: int) -> None:
+        """Record the current count (on the loop) and wake the waiters it satisfies."""
+        self.count = count
+        for wanted, future in list(self._waiters):
+            if count >= wanted and not future.done():
+                future.set_result(count)
+
+    async def wait(self, wanted: int) -> int:
+        """Return the count once at least ``wanted`` endpoints match."""
+        if isinstance(wanted, bool) or not isinstance(wanted, int) or wanted < 1:
+            msg = f"the number of endpoints to wait for must be a positive integer, got {wanted!r}"
+            raise ValueError(msg)
+        if self.count >= wanted:
+            return self.count
+        future: asyncio.Future[int] = asyncio.get_running_loop().create_future()
+        entry = (wanted, future)
+        self._waiters.append(entry)
+        try:
+            return await future
+        finally:
+            self._waiters.remove(entry)
+
+    def fail(self, error: Exception) -> None:
+        """Fail every waiter (the node stopped)."""
+        for _, future in self._waiters:
+            if not future.done():
+                future.set_exception(error)
+
+
+class _Endpoint:
+    """What a subscription and a publisher share: names, matches, closing."""
+
+    def __init__(self, thread: RosThread, topic: str, msg_type: type) -> None:
+        self.topic, self.msg_type = topic, msg_type
+        self.matches = Matches()
+        self._thread = thread
+        self._closed = False
+
+    def _on_matched(self, info: Any) -> None:  # on the ROS thread
+        self._thread.to_loop(self.matches.update, info.current_count)
+
+    def _close(self, destroy: str, entity: Any, what: str) -> Ros2Error | None:
+        """Destroy ``entity`` (``node.<destroy>(entity)``); the error waiters get, or None."""
+        if self._closed:
+            return None
+        self._closed = True
+        node = self._thread.node
+        if node is not None:
+            getattr(node, destroy)(entity)
+        error = Ros2Error(f"the {what} {self.topic!r} is closed")
+        self.matches.fail(error)
+        return error
+
+
+class Ros2Subscription(_Endpoint):
+    """A topic feeding ``robot.state`` (made by `Ros2Node.subscribe`).
+
+    Attributes:
+        topic: The topic's full name (namespace and remapping applied).
+        msg_type: The message class.
+        received: Messages delivered to the state (or the callback) so far.
+        dropped: Messages dropped because the event loop fell a whole queue behind.
+        keys: The state keys this subscription has written.
+    """
+
+    def __init__(
+        self,
+        thread: RosThread,
+        robot: Robot,
+        topic: str,
+        msg_type: type,
+        *,
+        mapping: Callable[[Any], Mapping[str, object] | None] | None,
+        callback: Callable[[Any], object] | None,
+        qos: Any,
+    ) -> None:
+        super().__init__(thread, topic, msg_type)
+        self.received = self.dropped = 0
+        self.keys: set[str] = set()
+        self._robot = robot
+        self._mapping, self._callback = mapping, callback
+        self._inbox: deque[Any] = deque()
+        self._depth = max(1, qos.depth)
+        self._lock = threading.Lock()
+        self._scheduled = False
+        self._next: list[asyncio.Future[Any]] = []
+        events = rclpy_module("rclpy.event_handler").SubscriptionEventCallbacks(
+            matched=self._on_matched
+        )
+        self._sub = thread.node.create_subscription(
+            msg_type, topic, self._on_message, qos, event_callbacks=events
+        )
+
+    @property
+    def publishers(self) -> int:
+        """How many publishers this subscription is matched with now."""
+        return self.matches.count
+
+    @property
+    def queued(self) -> int:
+        """Messages received from DDS and not yet delivered on the loop (the loop's lag)."""
+        with self._lock:
+            return len(self._inbox)
+
+    async def wait_for_publishers(self, count: int = 1) -> int:
+        """Return once at least ``count`` publishers are matched (wrap it in a timeout)."""
+        return await self.matches.wait(count)
+
+    async def wait_for_message(self) -> Any:
+        """Return the next message delivered (once it is in the state)."""
+        if self._closed:
+            raise Ros2Error(f"the subscription to {self.topic!r} is closed")
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        self._next.append(future)
+        try:
+            return await future
+        finally:
+            if future in self._next:
+                self._next.remove(future)
+
+    def close(self) -> None:
+        """Stop receiving; messages already queued are dropped."""
+        error = self._close("destroy_subscription", self._sub, "subscription to")
+        if error is None:
+            return
+        for future in self._next:
+            if not future.done():
+                future.set_exception(error)
+
+    # -- on the ROS thread ----------------------------------------------------------
+
+    def _on_message(self, message: Any) -> None:
+        with self._lock:
+            if len(self._inbox) >= self._depth:
+                self._inbox.popleft()
+                self.dropped += 1
+            self._inbox.append(message)
+            if self._scheduled:
+                return
+            self._scheduled = True
+        self._thread.to_loop(self._drain)
+
+    # -- on the loop ----------------------------------------------------------------
+
+    def _drain(self) -> None:
+        with self._lock:
+            messages = list(self._inbox)
+            self._inbox.clear()
+            self._scheduled = False
+        for message in messages:
+            if self._closed:
+                return
+            self.received += 1
+            self._deliver(message)
+
+    def _deliver(self, message: Any) -> None:
+        try:
+            if self._mapping is not None:
+                values = self._mapping(message)
+                if values:
+                    self._robot.state.update(values)
+                    self.keys.update(values)
+            if self._callback is not None:
+                self._callback(message)
+        except Exception:  # logged; the next message is delivered as usual
+            _log.exception("a message on %s could not be delivered to the state", self.topic)
+        if self._next:
+            waiting, self._next = self._next, []
+            for future in waiting:
+                if not future.done():
+                    future.set_result(message)
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else f"{self.received} received"
+        return f"<Ros2Subscription {self.topic} {ros_name(self.msg_type)} {state}>"
+
+
+class Ros2Publisher(_Endpoint, Generic[M]):
+    """A publisher on a topic (made by `Ros2Node.publisher`); ``publish`` never blocks.
+
+    Attributes:
+        topic: The topic's full name (namespace and remapping applied).
+        msg_type: The message class.
+    """
+
+    msg_type: type[M]
+
+    def __init__(self, thread: RosThread, topic: str, msg_type: type[M], qos: Any) -> None:
+        super().__init__(thread, topic, msg_type)
+        events = rclpy_module("rclpy.event_handler").PublisherEventCallbacks(
+            matched=self._on_matched
+        )
+        self._pub = thread.node.create_publisher(msg_type, topic, qos, event_callbacks=events)
+        self._publish = self._pub.publish
+
+    def publish(self, message: M) -> None:
+        """Send ``message`` (an instance of `msg_type`) now.
+
+        Raises:
+            TypeError: ``message`` is of another type; both types are named.
+            Ros2Error: The publisher is closed (or its robot stopped).
+        """
+        if self._closed:
+            msg = f"the publisher on {self.topic!r} is closed (its robot stopped?)"
+            raise Ros2Error(msg)
+        try:
+            self._publish(message)
+        except TypeError as err:
+            if isinstance(message, self.msg_type):
+                raise
+            msg = (
+                f"the publisher on {self.topic!r} sends {ros_name(self.msg_type)}, "
+                f"got {type(message).__module__}.{type(message).__qualname__}: {message!r}"
+            )
+            raise TypeError(msg) from err
+
+    @property
+    def subscribers(self) -> int:
+        """How many subscriptions this publisher is matched with now."""
+        return self.matches.count
+
+    async def wait_for_subscribers(self, count: int = 1) -> int:
+        """Return once at least ``count`` subscriptions are matched (wrap it in a timeout)."""
+        return await self.matches.wait(count)
+
+    def close(self) -> None:
+        """Stop publishing; `publish` raises from now on."""
+        self._close("destroy_publisher", self._pub, "publisher on")
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else f"{self.subscribers} subscribers"
+        return f"<Ros2Publisher {self.topic} {ros_name(self.msg_type)} {state}>"

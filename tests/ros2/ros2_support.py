@@ -1,0 +1,148 @@
+"""Helpers of the ROS 2 tests: plain rclpy nodes the tests write themselves, and waits.
+
+``PlainNode`` uses rclpy only, as any other ROS 2 program would; it is how
+the tests check that pyrobots_aio interoperates with ROS 2, not only with
+itself.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import threading
+from typing import TYPE_CHECKING, Any
+
+import pytest
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+SKIP_REASON = (
+    "the ROS 2 Python wheels are not installed: pip install 'pyrobots-aio[ros2]' "
+    "ros-test-msgs ros-std-srvs (nox -s ros2 runs these tests)"
+)
+DEADLINE = 60.0
+"""Seconds any single wait may take: DDS discovery on a loaded 2-core machine can be slow."""
+
+
+def require_rclpy() -> None:
+    """Skip the calling test module (with the reason) when rclpy is missing."""
+    pytest.importorskip("rclpy", reason=SKIP_REASON)
+
+
+async def wait_for(predicate: Callable[[], bool], period: float = 0.02) -> None:
+    """Wait until ``predicate()`` (a fact of the ROS graph) holds, under the caller's deadline.
+
+    rclpy offers no event for graph changes (its own ``wait_for_service``
+    sleeps and looks again), so this looks again every ``period``.
+    """
+    while not predicate():  # noqa: ASYNC110 - the graph has no event to wait on
+        await asyncio.sleep(period)
+
+
+class PlainNode:
+    """A plain rclpy node of the test's own: its own context, spun on its own thread.
+
+    It uses rclpy only, as any other ROS 2 program would; what it receives
+    reaches the test's loop through ``call_soon_threadsafe``.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        *,
+        threads: int = 1,
+        loop: asyncio.AbstractEventLoop | None = None,
+        spin: bool = True,
+    ) -> None:
+        import rclpy
+        from rclpy.context import Context
+        from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+
+        self.loop = loop or asyncio.get_running_loop()
+        self.context = Context()
+        self.context.init(args=[])
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor: Any = (
+            MultiThreadedExecutor(num_threads=threads, context=self.context)
+            if threads > 1
+            else SingleThreadedExecutor(context=self.context)
+        )
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self.executor.spin, name=f"plain {name}")
+        if spin:
+            self.thread.start()
+
+    def spin(self) -> None:
+        """Start spinning (for a node made with ``spin=False``)."""
+        self.thread.start()
+
+    def knows_client(self, node: str, namespace: str, name: str, *, action: bool) -> bool:
+        """Whether this node's view of the graph has ``node``'s client of ``name``."""
+        from rclpy.action import get_action_client_names_and_types_by_node
+        from rclpy.impl.implementation_singleton import rclpy_implementation
+
+        try:
+            if action:
+                clients = get_action_client_names_and_types_by_node(self.node, node, namespace)
+            else:
+                clients = self.node.get_client_names_and_types_by_node(node, namespace)
+        except (rclpy_implementation.NodeNameNonExistentError, rclpy_implementation.RCLError):
+            return False  # the node is not discovered yet
+        return name in dict(clients)
+
+    def to_loop(self, fn: Callable[..., object], *args: object) -> None:
+        """From rclpy's thread: run ``fn(*args)`` on the test's loop (if it still runs)."""
+        with contextlib.suppress(RuntimeError):  # the loop closed: the test is over
+            self.loop.call_soon_threadsafe(fn, *args)
+
+    def inbox(self, topic: str, msg_type: type, qos: Any = 10) -> asyncio.Queue[Any]:
+        """Subscribe to ``topic``; every message lands in the returned queue."""
+        queue: asyncio.Queue[Any] = asyncio.Queue()
+        self.node.create_subscription(
+            msg_type, topic, lambda m: self.to_loop(queue.put_nowait, m), qos
+        )
+        return queue
+
+    def publisher(
+        self, topic: str, msg_type: type, qos: Any = 10, *, subscribers: int = 1
+    ) -> tuple[Any, asyncio.Event]:
+        """A publisher, and an event set once ``subscribers`` subscriptions match it."""
+        from rclpy.event_handler import PublisherEventCallbacks
+
+        matched = asyncio.Event()
+
+        def on_matched(info: Any) -> None:
+            if info.current_count >= subscribers:
+                self.to_loop(matched.set)
+
+        events = PublisherEventCallbacks(matched=on_matched)
+        return self.node.create_publisher(msg_type, topic, qos, event_callbacks=events), matched
+
+    def close(self) -> None:
+        """Stop spinning; destroy the node and the context."""
+        self.executor.shutdown()
+        if self.thread.is_alive():
+            self.thread.join()
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
+async def next_where(queue: asyncio.Queue[Any], predicate: Callable[[Any], bool]) -> Any:
+    """The next message from ``queue`` for which ``predicate`` holds (others are skipped)."""
+    while True:
+        message = await queue.get()
+        if predicate(message):
+            return message
+
+
+async def meet(robot: Any, server: PlainNode, name: str, interface: type) -> None:
+    """Wait until the robot sees ``server``'s server of ``name`` and the server sees its client.
+
+    A DDS server answers a request only once it has matched the client's
+    reader (rmw waits 100 ms for that, then drops the response): on a loaded
+    machine, a test waits for both views of the graph before the first request.
+    """
+    await robot.ros2.wait_for_server(name, interface)
+    node, namespace, action = robot.ros2.name, robot.ros2.namespace, hasattr(interface, "Goal")
+    await wait_for(lambda: server.knows_client(node, namespace, name, action=action))
