@@ -1,10 +1,13 @@
-"""A randomized test of the executive: thousands of spawn, cancel and nest operations.
+"""A randomized test of the executive: thousands of spawn, cancel, pause and nest operations.
 
 Hypothesis draws programs. The driver (the test task) starts root actions, lets
-virtual time pass, cancels or awaits random handles and cancels everything; each
-action's body sleeps, starts children (awaited or not), fails, cancels a random
+virtual time pass, cancels, pauses, resumes or awaits random handles, pauses
+and resumes everything and cancels everything; each action's body sleeps,
+starts children (awaited or not), fails, cancels, pauses or resumes a random
 action or calls ``cancel_all_others``, and when cancelled re-raises, swallows the
-cancellation, or cleans up first (sleeping, or running a child action). The
+cancellation, or cleans up first (sleeping, or running a child action). A
+frozen body must never go on; a paused action left paused is still cancelled
+at shutdown, within the same bound. The
 invariants of DESIGN.md §3 are checked as the program runs and once the robot
 has shut down; every breach is collected as a message, so a failure shows the
 shrunk program and what went wrong.
@@ -71,6 +74,16 @@ class CancelOthers:
 
 
 @dataclass(frozen=True)
+class PauseOne:
+    index: int
+
+
+@dataclass(frozen=True)
+class ResumeOne:
+    index: int
+
+
+@dataclass(frozen=True)
 class Reraise:
     pass
 
@@ -92,7 +105,7 @@ class CleanupSpawn:
 
 @dataclass(frozen=True)
 class Body:
-    steps: tuple[Sleep | Spawn | Fail | CancelOne | CancelOthers, ...]
+    steps: tuple[Sleep | Spawn | Fail | CancelOne | CancelOthers | PauseOne | ResumeOne, ...]
     on_cancel: Reraise | Swallow | CleanupSleep | CleanupSpawn
 
 
@@ -109,6 +122,16 @@ class Await:
 
 @dataclass(frozen=True)
 class CancelAll:
+    pass
+
+
+@dataclass(frozen=True)
+class PauseAll:
+    pass
+
+
+@dataclass(frozen=True)
+class ResumeAll:
     pass
 
 
@@ -133,6 +156,8 @@ def bodies(depth: int) -> st.SearchStrategy[Body]:
         (1, st.builds(Fail)),
         (1, st.builds(CancelOne, INDEX)),
         (1, st.builds(CancelOthers)),
+        (1, st.builds(PauseOne, INDEX)),
+        (1, st.builds(ResumeOne, INDEX)),
     )
     cleanups = weighted(
         (1, st.builds(Reraise)),
@@ -156,6 +181,10 @@ programs = st.lists(
         (2, st.builds(CancelOne, INDEX)),
         (2, st.builds(Await, INDEX, st.sampled_from([0.1, 1.0, 10.0]))),
         (1, st.builds(CancelAll)),
+        (2, st.builds(PauseOne, INDEX)),
+        (2, st.builds(ResumeOne, INDEX)),
+        (1, st.builds(PauseAll)),
+        (1, st.builds(ResumeAll)),
     ),
     min_size=10,
     max_size=60,
@@ -261,14 +290,37 @@ class World:
         if left := [h for h in live if not h.done()]:
             self.breaches.append(f"cancel_all_others from {me!r} returned before {left!r}")
 
+    def check_thawed(self, me: ActionHandle[int], where: str) -> None:
+        """A body that goes on after an await must not be frozen."""
+        if me.paused:
+            self.breaches.append(f"{me!r} went on while frozen, {where}")
+
+    def pause_or_resume(self, op: PauseOne | ResumeOne, who: str) -> None:
+        target = self.pick(op.index)
+        if target is None:
+            return
+        if isinstance(op, PauseOne):
+            if target.pause(f"paused by {who}") is target.done():
+                self.breaches.append(f"{target!r}.pause() disagreed with done()")
+        elif (
+            target.resume()
+            and target.paused
+            and not any(a.paused for a in self.handles if target.childof(a))
+        ):
+            self.breaches.append(f"{target!r} still paused after resume()")
+
     async def step(self, me: ActionHandle[int], step: object) -> None:
         self.check_registry(f"before {step} in {me!r}")
-        if isinstance(step, Sleep):
+        if isinstance(step, PauseOne | ResumeOne):
+            self.pause_or_resume(step, f"#{me.id}")
+        elif isinstance(step, Sleep):
             await self.robot.sleep(step.seconds)
+            self.check_thawed(me, f"after sleeping {step.seconds}")
         elif isinstance(step, Spawn):
             child = self.spawn(step.body)
             if step.awaited:
                 await self.await_handle(child, repr(me))
+                self.check_thawed(me, f"after awaiting {child!r}")
         elif isinstance(step, Fail):
             self.ended[me.id] = "failed"
             raise Boom(me.id)
@@ -324,26 +376,15 @@ def reached(handle: ActionHandle[int], target: ActionHandle[int]) -> bool:
     return False
 
 
-async def run(world: World, program: list[Start | Sleep | CancelOne | Await | CancelAll]) -> None:
+Op = Start | Sleep | CancelOne | Await | CancelAll | PauseOne | ResumeOne | PauseAll | ResumeAll
+
+
+async def run(world: World, program: list[Op]) -> None:
     """The driver: run ``program`` from outside any action, checking the registry after each op."""
     robot = world.robot
     async with robot:
         for number, op in enumerate(program):
-            if isinstance(op, Start):
-                world.spawn(op.body)
-            elif isinstance(op, Sleep):
-                await robot.sleep(op.seconds)
-            elif isinstance(op, CancelOne | Await) and (target := world.pick(op.index)):
-                if isinstance(op, CancelOne):
-                    world.cancel(target, f"driver op {number}")
-                else:
-                    await wait_for(world, target, op.timeout)
-            elif isinstance(op, CancelAll):
-                live = [h for h in world.handles if not h.done()]
-                world.expect_cancelled(outermost(live, set()), f"driver op {number}")
-                await robot.cancel_all(f"driver op {number}")
-                if robot.handles():
-                    world.breaches.append(f"cancel_all left {robot.handles()!r} running")
+            await drive_op(world, op, number)
             world.check_registry(f"after op {number}")
         live = [h for h in world.handles if not h.done()]
         world.expect_cancelled(outermost(live, set()), "robot shutting down")
@@ -351,6 +392,34 @@ async def run(world: World, program: list[Start | Sleep | CancelOne | Await | Ca
     took = asyncio.get_running_loop().time() - exit_at
     if took > SHUTDOWN_BOUND:
         world.breaches.append(f"shutdown took {took} s")
+
+
+async def drive_op(world: World, op: Op, number: int) -> None:
+    """One op of the driver's program."""
+    robot = world.robot
+    if isinstance(op, Start):
+        world.spawn(op.body)
+    elif isinstance(op, Sleep):
+        await robot.sleep(op.seconds)
+    elif isinstance(op, CancelOne | Await) and (target := world.pick(op.index)):
+        if isinstance(op, CancelOne):
+            world.cancel(target, f"driver op {number}")
+        else:
+            await wait_for(world, target, op.timeout)
+    elif isinstance(op, PauseOne | ResumeOne):
+        world.pause_or_resume(op, "the driver")
+    elif isinstance(op, PauseAll):
+        robot.pause_all("the driver")
+    elif isinstance(op, ResumeAll):
+        robot.resume_all()
+        if paused := [h for h in world.handles if h.paused]:
+            world.breaches.append(f"resume_all left {paused!r} paused")
+    elif isinstance(op, CancelAll):
+        live = [h for h in world.handles if not h.done()]
+        world.expect_cancelled(outermost(live, set()), f"driver op {number}")
+        await robot.cancel_all(f"driver op {number}")
+        if robot.handles():
+            world.breaches.append(f"cancel_all left {robot.handles()!r} running")
 
 
 async def wait_for(world: World, target: ActionHandle[int], seconds: float) -> None:
@@ -405,9 +474,7 @@ def check_outcome(world: World, handle: ActionHandle[int]) -> None:
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 @given(program=programs)
-async def test_random_spawn_cancel_nest_keeps_the_invariants(
-    program: list[Start | Sleep | CancelOne | Await | CancelAll],
-) -> None:
+async def test_random_spawn_cancel_pause_nest_keeps_the_invariants(program: list[Op]) -> None:
     """Structure, outcomes, what awaiting raises, the registry and shutdown stay as designed."""
     before = asyncio.all_tasks()
     world = World()

@@ -178,3 +178,50 @@ async def test_the_random_walk_handles_every_bump_and_docks(base: Base, seed: in
     assert report.sim_time < 150
     assert set(log.outcomes("bumper_reflex")) <= {"succeeded"}
     assert len(log.outcomes("bumper_reflex")) <= report.bumps
+
+
+async def test_pausing_a_drive_halfway_stops_the_robot_and_resuming_reaches_the_goal(
+    base: Base,
+) -> None:
+    async with base.make() as robot:
+        await robot.undock()
+        x0, y0, _ = base.truth(robot)
+        drive = robot.drive_distance(1.0)
+        while math.hypot(base.truth(robot)[0] - x0, base.truth(robot)[1] - y0) < 0.5:
+            await robot.sleep(robot.control_period)
+        drive.pause("hold still")
+        await robot.sleep(1.0)  # time to brake
+        x1, y1, _ = base.truth(robot)
+        await robot.sleep(3.0)
+        assert robot.state.v == pytest.approx(0.0, abs=0.005)  # stopped, and stays so
+        x2, y2, _ = base.truth(robot)
+        assert math.hypot(x2 - x1, y2 - y1) < 0.002
+        assert 0.5 < math.hypot(x1 - x0, y1 - y0) < 0.7
+        drive.resume()
+        done = await drive
+        x3, y3, _ = base.truth(robot)
+    assert done == pytest.approx(1.0, abs=0.003)
+    assert math.hypot(x3 - x0, y3 - y0) == pytest.approx(1.0, abs=0.01)  # within 1 cm
+
+
+async def test_pausing_the_bumper_reflex_pauses_its_subtree_only(base: Base) -> None:
+    from pyrobots_aio.sim.random_walk import bumper_reflex
+
+    async with base.make() as robot:
+        await robot.undock()
+        walk = robot.drive_distance(5.0)  # toward the wall ahead
+        reflex = robot.on("bumper", becomes=True).do(bumper_reflex)
+        while reflex.firings == 0:
+            await robot.sleep(robot.control_period)
+        (handle,) = [h for h in robot.handles() if h.name == "bumper_reflex"]
+        while not handle.children:
+            await robot.sleep(robot.control_period)
+        handle.pause("look around")
+        frozen = [h for h in robot.handles() if h.paused]
+        assert {h.name for h in frozen} == {"bumper_reflex", "drive_distance"}
+        assert all(h is handle or h.childof(handle) for h in frozen)
+        await robot.sleep(2.0)
+        assert robot.state.v == pytest.approx(0.0, abs=0.005)
+        handle.resume()
+        assert await handle.wait_done() is Outcome.SUCCEEDED
+        assert await walk.wait_done() is Outcome.CANCELLED  # preempted by the reflex, as usual

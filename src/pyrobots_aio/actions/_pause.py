@@ -33,11 +33,15 @@ T = TypeVar("T")
 
 
 def frozen(handle: ActionHandle[Any]) -> bool:
-    """Whether ``handle`` is paused, or under a paused ancestor, and not being cancelled."""
-    if handle._cancel_requested:
-        return False
+    """Whether ``handle`` is paused, or under a paused ancestor, and not being cancelled.
+
+    The walk up stops at a cancelled action: cancellation reaches a paused
+    action at once, and its cleanup (the actions it starts then) runs unfrozen.
+    """
     node: ActionHandle[Any] | None = handle
     while node is not None:
+        if node._cancel_requested:
+            return False
         if node._paused:
             return True
         node = node.parent
