@@ -71,6 +71,26 @@ async def test_monitors_and_awaits_from_a_worker_thread_say_how() -> None:
 
 
 @pytest.mark.asyncio
+async def test_writing_state_from_a_worker_thread_says_how() -> None:
+    robot = Robot()
+    robot.state.mode = "idle"  # before the robot runs, from anywhere
+    async with robot:
+        single = await _in_thread(lambda: robot.state.update(mode="busy"))
+        attribute = await _in_thread(lambda: setattr(robot.state, "mode", "busy"))
+        assert isinstance(single, EventLoopError)
+        assert isinstance(attribute, EventLoopError)
+        assert str(single).startswith("cannot write state keys ['mode'] from thread 'worker'")
+        assert str(attribute).startswith("cannot write state key 'mode' from thread 'worker'")
+        assert THREADSAFE in str(single)
+        assert robot.state.mode == "idle"  # nothing was written
+        robot.call_soon_threadsafe(robot.state.update, {"mode": "busy"})  # the way in
+        await asyncio.sleep(0)
+        assert robot.state.mode == "busy"
+    await _in_thread(lambda: robot.state.update(mode="off"))  # stopped: from anywhere again
+    assert robot.state.mode == "off"
+
+
+@pytest.mark.asyncio
 async def test_the_threadsafe_ways_in_work_from_a_worker_thread() -> None:
     async with Robot() as robot:
         robot.state.mode = "idle"

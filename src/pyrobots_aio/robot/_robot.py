@@ -173,10 +173,14 @@ class Robot(StateMethods):
         if loop is None:
             raise no_asyncio_loop(f"run {type(self).__name__}")
         self._executive.open(loop)
+        self._state.bind(loop)
         try:
             await self._start()
         except BaseException:
-            await self._executive.close(SHUTDOWN_REASON)
+            try:
+                await self._executive.close(SHUTDOWN_REASON)
+            finally:
+                self._state.bind(None)
             raise
         return self
 
@@ -189,7 +193,10 @@ class Robot(StateMethods):
             finally:
                 await self._executive.close(SHUTDOWN_REASON)
         finally:
-            await self._stop()
+            try:
+                await self._stop()
+            finally:
+                self._state.bind(None)
 
     async def _start(self) -> None:
         """Start what the robot owns (the live view, the backend); subclasses extend this."""

@@ -7,6 +7,7 @@ predicate depends on (`_reads`).
 
 The store is not thread-safe: write it from the event loop's thread (a backend
 that samples in a thread hands its readings over with ``call_soon_threadsafe``).
+A running robot's store refuses writes from other threads (`StateStore.bind`).
 """
 
 from __future__ import annotations
@@ -14,11 +15,13 @@ from __future__ import annotations
 import asyncio
 import difflib
 import reprlib
+import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from pyrobots_aio._core._loops import current_loop, wrong_loop
 from pyrobots_aio._exceptions import UnknownStateKeyError
 
 from ._filter import MovingAverage
@@ -95,7 +98,9 @@ class StateStore(Mapping[str, Any]):
     __slots__ = (
         "_clock",
         "_ledger",
+        "_loop",
         "_subscribers",
+        "_thread",
         "_values",
         "_version",
         "_windows",
@@ -120,8 +125,20 @@ class StateStore(Mapping[str, Any]):
         self._version = 0
         self._subscribers = SubscriberIndex()
         self._windows: dict[str, MovingAverage] = {}
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread = ""
         if initial:
             self.update(initial)
+
+    def bind(self, loop: asyncio.AbstractEventLoop | None) -> None:
+        """Accept writes only from ``loop`` (its thread) from now on; None: from anywhere.
+
+        A running robot binds its store to its loop: a write from a worker
+        thread then raises `EventLoopError` naming the thread-safe way in
+        (``robot.call_soon_threadsafe``), instead of racing the loop.
+        """
+        self._loop = loop
+        self._thread = threading.current_thread().name if loop is not None else ""
 
     # -- reading --------------------------------------------------------------
 
@@ -215,6 +232,8 @@ class StateStore(Mapping[str, Any]):
     def set(self, key: str, value: Any) -> None:
         """Write ``value`` under ``key`` and notify its subscribers."""
         check_key(key)
+        if self._loop is not None and current_loop() is not self._loop:
+            raise wrong_loop(f"write state key {key!r}", self._loop, self._thread)
         now = self._clock()
         self._values[key] = value
         self._ledger.write(key, now)
@@ -267,6 +286,8 @@ class StateStore(Mapping[str, Any]):
         if not changes.keys() <= self._values.keys():  # known keys are strings already
             for key in changes:
                 check_key(key)
+        if self._loop is not None and current_loop() is not self._loop:
+            raise wrong_loop(f"write state keys {sorted(changes)}", self._loop, self._thread)
         now = self._clock()
         keys = tuple(changes)
         self._values.update(changes)
