@@ -58,8 +58,16 @@ class FoxgloveClient:
 
 
 def _refused(port: int) -> bool:
+    """Whether nothing listens on the port any more.
+
+    The server's port is an ephemeral one, so the probe's own source port may be
+    the very same number: Linux then joins the socket to itself (a TCP
+    simultaneous open) and the connection "succeeds" with no server there.
+    """
     with socket.socket() as probe:
-        return probe.connect_ex(("127.0.0.1", port)) != 0
+        if probe.connect_ex(("127.0.0.1", port)) != 0:
+            return True
+        return bool(probe.getsockname() == probe.getpeername())
 
 
 def _python_threads() -> set[threading.Thread]:

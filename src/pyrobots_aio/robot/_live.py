@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import datetime
 import logging
+import socket
+import time
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import PyRobotsError
@@ -32,6 +34,35 @@ if TYPE_CHECKING:
 _log = logging.getLogger("pyrobots_aio.live")
 LOGGER = "pyrobots_aio"
 """The logger whose records are published on ``/pyrobots/log``."""
+
+CLOSE_LIMIT = 2.0
+"""Seconds `LiveView.stop` waits at most for the SDK to let go of the port."""
+
+
+def _port_free(host: str, port: int) -> bool:
+    """Whether a new server could listen on ``host:port`` now (no connection is made)."""
+    with socket.socket() as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind((host, port))
+        except OSError:
+            return False
+        return True
+
+
+def _wait_port_free(host: str, port: int) -> None:
+    """Wait (briefly, bounded) until the port is free again.
+
+    The SDK's ``stop()`` returns before its runtime closes the listening socket
+    (about a millisecond later); without this wait a robot started right after
+    on the same port could find it taken.
+    """
+    deadline = time.monotonic() + CLOSE_LIMIT
+    while not _port_free(host, port):
+        if time.monotonic() > deadline:
+            _log.warning("the live view's port %s:%s is still taken after stop", host, port)
+            return
+        time.sleep(0.001)
 
 
 def _sdk() -> ModuleType:
@@ -126,7 +157,9 @@ class LiveView:
             self._robot = None
         server, self._server = self._server, None
         if server is not None:
+            port = int(server.port)
             server.stop()
+            _wait_port_free(self.host, port)
         for channel in self._channels.values():
             channel.close()
         self._channels.clear()
