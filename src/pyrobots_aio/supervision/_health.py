@@ -273,7 +273,12 @@ class HealthMonitor:
             return
         now = self.robot.time()
         watched.last = now
-        watched.fresh = (HealthLevel.OK, "")
+        if watched.fresh[0] is not HealthLevel.OK:
+            # Its timer (if any) waits for a later threshold: the first one comes first again.
+            watched.fresh = (HealthLevel.OK, "")
+            if watched.timer is not None:
+                watched.timer.cancel()
+                watched.timer = None
         if watched.timer is None:
             self._schedule(watched, now)
         if watched.level() != watched.shown:
