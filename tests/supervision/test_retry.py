@@ -161,9 +161,9 @@ async def test_each_attempt_is_a_child_action_after_its_backoff(
     assert robot.spawned("lift") == [(0.0, None), (0.0, 1), (0.3, 1), (0.7, 1)]
     assert robot.record.outcomes("lift") == ["failed", "failed", "succeeded", "succeeded"]
     assert [r.getMessage() for r in caplog.records] == [
-        "lift#1: attempt 1 of 4 failed (RuntimeError('arm controller timeout (attempt 1)')); "
+        "lift: attempt 1 of 4 failed (RuntimeError('arm controller timeout (attempt 1)')); "
         "retrying in 0.1 s",
-        "lift#1: attempt 2 of 4 failed (RuntimeError('arm controller timeout (attempt 2)')); "
+        "lift: attempt 2 of 4 failed (RuntimeError('arm controller timeout (attempt 2)')); "
         "retrying in 0.2 s",
     ]
 

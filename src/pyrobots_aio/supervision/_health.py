@@ -331,7 +331,8 @@ class HealthMonitor:
                 values[f"{self.prefix}_{watched.name}"] = level.value
                 if old is not None:
                     log = _log.warning if _ORDER[level] > _ORDER[old[0]] else _log.info
-                    log("health of %s: %s -> %s %s", watched.name, old[0], level, message)
+                    why = f" ({message})" if message else ""
+                    log("health of %s: %s -> %s%s", watched.name, old[0], level, why)
         levels = (w.level()[0] for w in self._watched.values())
         overall = max(levels, key=_ORDER.__getitem__, default=HealthLevel.OK)
         if overall is not self._overall:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import ActionInterrupted
-from ..actions import Action, current_action
+from ..actions import Action
 from ..actions._decorator import executive_of
 from ._timeout import timed_out
 from ._wrap import ActionDecorator
@@ -213,6 +213,4 @@ def _exception_types(on: object) -> tuple[type[Exception], ...]:
 
 def _log_retry(robot: object, name: str, attempt: str, error: Exception, delay: float) -> None:
     log = executive_of(robot, name).log_scope.logger("pyrobots_aio.supervision")
-    handle = current_action.get()
-    who = f"{name}#{handle.id}" if handle is not None else name
-    log.info("%s: attempt %s failed (%r); retrying in %.3g s", who, attempt, error, delay)
+    log.info("%s: attempt %s failed (%r); retrying in %.3g s", name, attempt, error, delay)
