@@ -1,9 +1,11 @@
-"""Master controller: a plan executed as actions, with retries, e-stop and a health monitor.
+"""Master controller: a plan run by a state machine, with retries, a health monitor and an e-stop.
 
-The executive of a humanoid's integration module: each plan step is an action;
-a step that fails is retried with exponential backoff; a health monitor flags
-a sensor stream whose rate drops; pressing the emergency stop cancels every
-other action, disables the motors and returns the robot to a safe state.
+The executive of a humanoid's integration module, built from the supervision
+parts instead of hand-written loops: a `StateMachine` runs the phases (the
+plan; after a fault, the recovery to a safe pose); a flaky step is `retry`-ed
+with exponential backoff; a `HealthMonitor` watches the camera stream. When
+the stream is lost, the emergency stop cuts the motors and preempts every
+action driving a limb; the plan fails, and the machine recovers.
 
 Run: ``python examples/master_controller.py``
 """
@@ -14,19 +16,29 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING
 
-from pyrobots_aio import ActionInterrupted, Robot, action
-from pyrobots_aio.actions import current_action
+from pyrobots_aio import (
+    CompoundResource,
+    HealthMonitor,
+    Outcome,
+    Resource,
+    Robot,
+    StateMachine,
+    action,
+    exponential,
+    lock,
+    retry,
+)
 from pyrobots_aio.cli import install_console_handler
 
 if TYPE_CHECKING:
-    from collections.abc import Awaitable, Callable, Iterable
+    from collections.abc import Iterable
 
     from pyrobots_aio import Instrument
 
-RETRIES = 4
-BACKOFF = 0.1  # seconds before the first retry; doubled each time
-CAMERA_RATE = 30.0  # Hz the camera should publish at
-MIN_RATE = 20.0  # below this, the stream is flagged
+ARMS, LEGS = Resource("arms"), Resource("legs")
+BODY = CompoundResource(ARMS, LEGS, name="body")
+PLAN = ("grasp_cup", "lift", "walk_to_table", "grasp_cup")
+CAMERA_RATE = 30.0  # Hz the camera publishes at, until its driver crashes
 
 log = logging.getLogger("master_controller")
 
@@ -44,25 +56,34 @@ class Humanoid(Robot):
         self.report.append(line)
         log.info("%s", line)
 
+    def halt_actuators(self) -> None:
+        self.state.motors = False  # the emergency stop cuts the motors first
+        super().halt_actuators()
+
     @action
+    @lock(ARMS)
     async def grasp_cup(self) -> str:
         await self.sleep(0.3)
         return "cup grasped"
 
+    @retry(4, backoff=exponential(0.1, factor=2))  # 0.1 s, 0.2 s, 0.4 s between attempts
     @action
+    @lock(ARMS)
     async def lift(self) -> str:
         self.lift_attempts += 1
         await self.sleep(0.2)
         if self.lift_attempts < 3:
             raise RuntimeError(f"arm controller timeout (attempt {self.lift_attempts})")
-        return "cup lifted"
+        return f"cup lifted (attempt {self.lift_attempts})"
 
     @action
+    @lock(LEGS)
     async def walk_to_table(self) -> str:
         await self.sleep(5.0)
         return "at the table"
 
     @action
+    @lock(BODY)
     async def go_to_safe_pose(self) -> str:
         await self.sleep(0.5)
         self.state.pose = "safe"
@@ -70,93 +91,55 @@ class Humanoid(Robot):
 
 
 @action
-async def run_step(robot: Humanoid, step: str) -> str:
-    """Run one plan step, retrying a failure with exponential backoff."""
-    attempt: Callable[[], Awaitable[str]] = getattr(robot, step)
-    delay = BACKOFF
-    for _ in range(RETRIES - 1):
-        try:
-            return await attempt()
-        except ActionInterrupted:
-            raise
-        except Exception as error:
-            robot.note(f"{step} failed ({error}); retrying in {delay:.1f} s")
-            await robot.sleep(delay)
-            delay *= 2
-    return await attempt()  # the last attempt: its failure is the step's
+async def execute_plan(robot: Humanoid) -> None:
+    """Run the plan's steps in turn: a step that fails, or is stopped, fails the plan."""
+    for step in PLAN:
+        robot.note(f"{step}: {await getattr(robot, step)()}")
 
 
 @action
-async def execute_plan(robot: Humanoid, plan: list[str]) -> list[str]:
-    """Execute the plan step by step; stop at the first step that cannot be done."""
-    done = []
-    for step in plan:
-        try:
-            done.append(await run_step(robot, step))
-        except ActionInterrupted as stop:
-            robot.note(f"plan stopped during {step}: {stop.reason}")
-            break
-        robot.note(f"{step}: {done[-1]}")
-    return done
-
-
-@action
-async def health_monitor(robot: Humanoid, period: float = 0.5) -> None:
-    """Flag the camera stream when its publishing rate drops below MIN_RATE."""
-    last = robot.state.version("camera")
-    while True:
-        await robot.sleep(period)
-        now = robot.state.version("camera")
-        rate, last = (now - last) / period, now
-        healthy = rate >= MIN_RATE
-        if healthy != robot.state.camera_ok:
-            robot.state.camera_ok = healthy
-            robot.note(f"camera stream {'recovered' if healthy else 'degraded'}: {rate:.0f} Hz")
-
-
-@action
-async def emergency_stop(robot: Humanoid) -> None:
-    """Cancel everything else, cut the motors, return to the safe pose."""
-    robot.state.motors = False
-    await robot.cancel_all_others("emergency stop")
-    me = current_action.get()
-    robot.note(f"e-stop: {status(robot, but=me.id if me else None)}")
+async def recover(robot: Humanoid) -> None:
+    """After a fault: say what stopped the robot, then take the safe pose."""
+    robot.note(f"fault ({robot.emergency_stop_reason}): {status(robot)}")
     robot.note(await robot.go_to_safe_pose())
 
 
-def status(robot: Humanoid, but: int | None = None) -> str:
-    """What still runs (leaving out action ``but``) and whether the motors are on."""
-    running = ", ".join(f"{i.name}#{i.id}" for i in robot.running() if i.id != but)
-    actions = f"still running: {running}" if running else "nothing running"
-    return f"{actions}, motors {'on' if robot.state.motors else 'off'}"
+MASTER = StateMachine(
+    "master",
+    {"plan": execute_plan, "recover": recover, "done": None, "safe": None},
+    [
+        ("plan", "done", Outcome.SUCCEEDED),
+        ("plan", "recover", Outcome.FAILED),
+        ("recover", "safe", Outcome.SUCCEEDED),
+    ],
+)
 
 
-async def camera(robot: Humanoid, degrade_at: float) -> None:
-    """The camera driver: 30 Hz, then 5 Hz after ``degrade_at`` seconds."""
-    start = robot.time()
-    while True:
-        rate = CAMERA_RATE if robot.time() - start < degrade_at else 5.0
+def status(robot: Humanoid) -> str:
+    """Which limbs are held, and whether the motors are on."""
+    held = ", ".join(sorted(r.name for r in robot.resources.held())) or "no limb"
+    return f"{held} in use, motors {'on' if robot.state.motors else 'off'}"
+
+
+async def camera(robot: Humanoid, frames: int) -> None:
+    """The camera driver: 30 Hz, until it crashes after ``frames`` frames."""
+    for _ in range(frames):
         robot.state.camera = robot.time()
-        await asyncio.sleep(1 / rate)
+        await asyncio.sleep(1 / CAMERA_RATE)
 
 
 async def main(instruments: Iterable[Instrument] = ()) -> list[str]:
     async with Humanoid(instruments) as robot:
-        robot.state.update(camera=0.0, camera_ok=True, motors=True, estop=False, pose="home")
-        driver = asyncio.create_task(camera(robot, degrade_at=1.5))
-        robot.on("estop", becomes=True).do(emergency_stop)
-        health_monitor(robot)
-        plan = execute_plan(robot, ["grasp_cup", "lift", "walk_to_table", "grasp_cup"])
-        await robot.sleep(3.0)
-        robot.state.estop = True  # someone hits the red button mid-walk
-        try:
-            await plan
-        except ActionInterrupted as stop:
-            robot.note(f"plan interrupted: {stop.reason}")
-        await robot.sleep(1.0)
-        driver.cancel()
-        await asyncio.gather(driver, return_exceptions=True)
-        robot.note(f"pose {robot.state.pose}, {status(robot)}")
+        robot.state.update(camera=0.0, motors=True, pose="home")
+        driver = asyncio.create_task(camera(robot, frames=75))  # 2.5 s, then it crashes
+        health = HealthMonitor(robot)
+        health.watch("camera", warn_after=0.1, stale_after=0.5)
+        health.start()
+        robot.whenever("health_camera", becomes="stale").do(robot.emergency_stop, "camera lost")
+        phase = await MASTER(robot)
+        await driver
+        pose, camera_health = robot.state.pose, robot.state.health
+        robot.note(f"{phase}: pose {pose}, camera {camera_health}, {status(robot)}")
         return robot.report
 
 

@@ -19,6 +19,7 @@ PUBLIC = [
     "pyrobots_aio.ros2",
     "pyrobots_aio.sim",
     "pyrobots_aio.state",
+    "pyrobots_aio.supervision",
     "pyrobots_aio.testing",
 ]
 
@@ -38,6 +39,7 @@ def test_the_design_names_are_importable_from_the_package() -> None:
         "ActionInterrupted", "ActionSkipped", "TooManyActions", "PyRobotsError", "Resource",
         "CompoundResource", "lock", "Pose", "FrameProvider", "InvalidPoseError",
         "UnknownFrameError", "EventMonitor", "StateStore", "ActionInfo", "DriveBase",
+        "retry", "exponential", "timeout", "HealthMonitor", "StateMachine",
     }  # fmt: skip
     assert names <= set(pyrobots_aio.__all__)
     assert pyrobots_aio.ActionCancelled is __import__("asyncio").CancelledError

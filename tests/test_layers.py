@@ -20,6 +20,7 @@ LAYERS = {
     "events": 3,
     "robot": 4,
     "motion": 4.5,
+    "supervision": 4.5,
     "recording": 5,
     "sim": 5,
     "ros2": 5,

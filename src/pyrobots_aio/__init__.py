@@ -6,7 +6,8 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 2. ``resources``, ``state``, ``poses``
 3. ``actions``, ``events``
 4. ``robot`` (the composition root)
-5. ``motion`` (`DriveBase`: the motion actions, over any base)
+5. ``motion`` (`DriveBase`: the motion actions, over any base), ``supervision``
+   (retry, timeout, health monitor, state machine)
 6. ``recording``, ``sim``, ``ros2``, ``testing``, ``cli`` (public API only)
 """
 
@@ -20,6 +21,7 @@ from ._exceptions import ActionError as ActionError
 from ._exceptions import ActionInterrupted as ActionInterrupted
 from ._exceptions import ActionSkipped as ActionSkipped
 from ._exceptions import CorruptRecordingError as CorruptRecordingError
+from ._exceptions import EmergencyStopError as EmergencyStopError
 from ._exceptions import EventLoopError as EventLoopError
 from ._exceptions import GoalError as GoalError
 from ._exceptions import GoalRejectedError as GoalRejectedError
@@ -41,6 +43,7 @@ from ._exceptions import Ros2UnavailableError as Ros2UnavailableError
 from ._exceptions import SimulationError as SimulationError
 from ._exceptions import SimulationUnavailableError as SimulationUnavailableError
 from ._exceptions import StateError as StateError
+from ._exceptions import StateMachineError as StateMachineError
 from ._exceptions import TooManyActions as TooManyActions
 from ._exceptions import TopicTypeError as TopicTypeError
 from ._exceptions import UnknownFrameError as UnknownFrameError
@@ -69,6 +72,11 @@ from .robot import GenericRobot as GenericRobot
 from .robot import Robot as Robot
 from .state import StateSample as StateSample
 from .state import StateStore as StateStore
+from .supervision import HealthMonitor as HealthMonitor
+from .supervision import StateMachine as StateMachine
+from .supervision import exponential as exponential
+from .supervision import retry as retry
+from .supervision import timeout as timeout
 
 __version__ = "0.1.0"
 
@@ -88,6 +96,7 @@ __all__ = [
     "CompoundResource",
     "CorruptRecordingError",
     "DriveBase",
+    "EmergencyStopError",
     "EventKind",
     "EventLoopError",
     "EventManager",
@@ -98,6 +107,7 @@ __all__ = [
     "GenericRobot",
     "GoalError",
     "GoalRejectedError",
+    "HealthMonitor",
     "Instrument",
     "InvalidConditionError",
     "InvalidPoseError",
@@ -124,6 +134,8 @@ __all__ = [
     "SimulationError",
     "SimulationUnavailableError",
     "StateError",
+    "StateMachine",
+    "StateMachineError",
     "StateSample",
     "StateStore",
     "TooManyActions",
@@ -131,5 +143,8 @@ __all__ = [
     "UnknownFrameError",
     "UnknownStateKeyError",
     "action",
+    "exponential",
     "lock",
+    "retry",
+    "timeout",
 ]

@@ -26,6 +26,8 @@ PyRobotsError
 │   ├── ModelLoadError            an MJCF file that does not load
 │   └── LockstepError             a lockstep robot outside the lockstep loop
 ├── MotionError                   a motion action that cannot do its job (docking failed)
+│   └── EmergencyStopError        motion refused: the emergency stop is latched (.reason)
+├── StateMachineError             a StateMachine refused when built (unknown state, bad trigger)
 ├── RecordingError
 │   └── CorruptRecordingError     a recording line that cannot be read (.line)
 └── Ros2Error
@@ -228,6 +230,28 @@ class LockstepError(SimulationError):
 
 class MotionError(PyRobotsError):
     """A motion action of a `DriveBase` could not do its job (docking failed)."""
+
+
+class EmergencyStopError(MotionError):
+    """Motion refused: the robot's emergency stop is latched.
+
+    Raised by ``drive`` and the motion actions of a `DriveBase` from
+    ``robot.emergency_stop(reason)`` until ``robot.clear_emergency_stop()``.
+
+    Attributes:
+        reason: The reason the emergency stop was given.
+    """
+
+    def __init__(self, what: str, reason: str) -> None:
+        self.reason = reason
+        super().__init__(
+            f"{what} refused: the emergency stop is latched ({reason!r}); call "
+            "robot.clear_emergency_stop() once it is safe to move"
+        )
+
+
+class StateMachineError(PyRobotsError, ValueError):
+    """A `StateMachine` refused when it is built: an unknown state, a bad trigger or condition."""
 
 
 class RecordingError(PyRobotsError):

@@ -104,25 +104,41 @@ async def test_master_controller() -> None:
     report = await load_example("master_controller").main(instruments=[log])
     assert report == [
         "grasp_cup: cup grasped",
-        "lift failed (arm controller timeout (attempt 1)); retrying in 0.1 s",
-        "lift failed (arm controller timeout (attempt 2)); retrying in 0.2 s",
-        "lift: cup lifted",
-        "camera stream degraded: 6 Hz",
-        "plan interrupted: emergency stop",
-        "e-stop: nothing running, motors off",
+        "lift: cup lifted (attempt 3)",
+        "fault (camera lost): no limb in use, motors off",
         "safe pose",
-        "pose safe, nothing running, motors off",
+        "safe: pose safe, camera stale, no limb in use, motors off",
     ]
+    # retries: each attempt of lift is a child of the retrying lift, after its backoff
+    (retrying, *attempts) = log.of_kind(EventKind.ACTION_SPAWNED, "lift")
+    assert [e.data["parent"] for e in attempts] == [retrying.action] * 3
+    assert [e.time - retrying.time for e in attempts] == pytest.approx([0, 0.2 + 0.1, 0.5 + 0.2])
+    assert log.outcomes("lift") == ["failed", "failed", "succeeded", "succeeded"]
+    # the fault: the camera's last frame was at 74/30 s; stale 0.5 s later, the e-stop
+    stop = log.first(EventKind.ACTION_SPAWNED, "emergency_stop")
+    assert stop.time == pytest.approx(74 / 30 + 0.5)
+    walk = log.assert_cancelled("walk_to_table", by="emergency_stop", after=stop.time, within=0)
+    assert walk.data["reason"] == "emergency stop: camera lost"
+    # every action holding a limb at the e-stop ended before the recovery took the safe pose
     events = log.events
-    estop = events.index(log.first(EventKind.ACTION_SPAWNED, "emergency_stop"))
     safe_pose = events.index(log.first(EventKind.ACTION_STARTED, "go_to_safe_pose"))
-    spawned = {e.action for e in events[:estop] if e.kind is EventKind.ACTION_SPAWNED}
-    ended = {e.action for e in events[:safe_pose] if e.kind is EventKind.ACTION_FINISHED}
-    # every action started before the e-stop, health monitor included, ended before the safe pose
-    assert ended == spawned
-    assert log.outcomes("health_monitor") == ["cancelled"]
-    spawned_since = [e.name for e in events[estop:] if e.kind is EventKind.ACTION_SPAWNED]
-    assert spawned_since == ["emergency_stop", "go_to_safe_pose"]
+    acquired = {
+        e.action for e in events[: events.index(stop)] if e.kind is EventKind.RESOURCE_ACQUIRED
+    }
+    released = {e.action for e in events[:safe_pose] if e.kind is EventKind.RESOURCE_RELEASED}
+    assert acquired <= released
+    # the phases: the machine's states are its children, the plan failed, the recovery worked
+    master = log.first(EventKind.ACTION_SPAWNED, "master").action
+    phases = [e.name for e in log.of_kind(EventKind.ACTION_SPAWNED) if e.data["parent"] == master]
+    assert phases == ["execute_plan", "recover"]
+    assert log.outcomes("execute_plan") == ["failed"]
+    assert log.outcomes("master") == ["succeeded"]
+    assert log.outcomes("go_to_safe_pose") == ["succeeded"]
+    spawned_since = [
+        e.name for e in events[events.index(stop) :] if e.kind is EventKind.ACTION_SPAWNED
+    ]
+    assert spawned_since == ["emergency_stop", "recover", "go_to_safe_pose"]
+    assert log.outcomes("health_monitor") == ["cancelled"]  # it ran until the robot's exit
 
 
 @pytest.mark.asyncio

@@ -131,11 +131,14 @@ class Executive:
         fn: Callable[..., Coroutine[Any, Any, T]],
         coro: Coroutine[Any, Any, T],
         hooks: Hooks | None = None,
+        *,
+        uncapped: bool = False,
     ) -> ActionHandle[T]:
         """Start ``coro`` (made by the action function ``fn``) as an action now; return its handle.
 
         Never blocks. If the action cannot start, ``coro`` is closed and the
-        error says why.
+        error says why. With ``uncapped`` it starts even at ``max_actions``
+        (the emergency stop: it must never be refused for being one too many).
         """
         loop = self._loop
         parent = current_action.get()
@@ -145,10 +148,14 @@ class Executive:
             loop is None
             or current_loop() is not loop
             or (parent is None and self._closing)
-            or (self.max_actions is not None and len(self._running) >= self.max_actions)
+            or (
+                self.max_actions is not None
+                and len(self._running) >= self.max_actions
+                and not uncapped
+            )
         ):
             coro.close()
-            raise self._refusal(name, loop)
+            raise self._refusal(name, loop, uncapped=uncapped)
         ident = self._next_id
         self._next_id = ident + 1
         handle: ActionHandle[T] = ActionHandle(self, loop, ident, name, parent)
@@ -166,7 +173,9 @@ class Executive:
             self._emit(EventKind.ACTION_SPAWNED, handle, parent=parent.id if parent else None)
         return handle
 
-    def _refusal(self, name: str, loop: asyncio.AbstractEventLoop | None) -> Exception:
+    def _refusal(
+        self, name: str, loop: asyncio.AbstractEventLoop | None, *, uncapped: bool = False
+    ) -> Exception:
         """Why action ``name`` cannot start now (`spawn` found that it cannot)."""
         if loop is None:
             msg = (
@@ -176,7 +185,7 @@ class Executive:
             return RobotNotRunningError(msg)
         if current_loop() is not loop:
             return wrong_loop(f"start action {name!r}", loop, self.thread)
-        if self.max_actions is not None and len(self._running) >= self.max_actions:
+        if self.max_actions is not None and len(self._running) >= self.max_actions and not uncapped:
             return TooManyActions(name, self.max_actions, list(self._running.values()))
         msg = (
             f"cannot start action {name!r}: {self.owner!r} is shutting down; start it "

@@ -6,7 +6,9 @@ primitives a base provides: the simulator (`pyrobots_aio.sim.SimRobot`), a
 ROS 2 robot, or the in-memory `pyrobots_aio.testing.FakeBase`. Every motion
 action locks `WHEELS`, drives through a per-tick controller on the base's
 own measures (as a robot's firmware would), and stops the wheels when it ends
-for any reason, cancellation and preemption included.
+for any reason, cancellation and preemption included. While the robot's
+emergency stop is latched (``robot.emergency_stop(reason)``, which stops the
+wheels at once), the motion actions and ``drive`` refuse to move.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import math
 from typing import TYPE_CHECKING, Protocol
 
 from .._exceptions import MotionError
-from ..actions import action, lock
+from ..actions import action, current_action, lock
 from ..resources import Resource
 from ..robot import Robot
 from ._math import checked, ramp, wrap_angle
@@ -122,12 +124,24 @@ class DriveBase(Robot, abc.ABC):
         """Command linear speed ``v`` (m/s) and angular speed ``w`` (rad/s) until changed.
 
         A plain call that does not lock the wheels; actions lock `WHEELS` first.
+
+        Raises:
+            EmergencyStopError: The emergency stop is latched (``drive(0, 0)``
+                is still allowed: it stops).
         """
-        self._set_velocity(checked("v", v), checked("w", w))
+        v, w = checked("v", v), checked("w", w)
+        if v or w:
+            self._refuse_motion(f"drive({v!r}, {w!r})")
+        self._set_velocity(v, w)
 
     def stop(self) -> None:
         """Stop the wheels."""
         self._set_velocity(0.0, 0.0)
+
+    def halt_actuators(self) -> None:
+        """Stop the wheels (the emergency stop calls it first)."""
+        self.stop()
+        super().halt_actuators()
 
     # -- motion actions ---------------------------------------------------
 
@@ -252,7 +266,12 @@ class DriveBase(Robot, abc.ABC):
         return abs(remaining) <= min(tolerance, abs(speed) * self.control_period / 2)
 
     async def _steer(self, step: Callable[[], bool]) -> None:
-        """Run ``step`` now and after every tick until it returns True; stop the wheels after."""
+        """Run ``step`` now and after every tick until it returns True; stop the wheels after.
+
+        Refused (`EmergencyStopError`) while the emergency stop is latched.
+        """
+        handle = current_action.get()
+        self._refuse_motion(handle.name if handle is not None else "motion")
         try:
             if not step():
                 await self.control(step)

@@ -24,6 +24,7 @@ from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager
 from ..state import StateStore
+from ._estop import EmergencyStop
 from ._live import LiveView
 from ._monitoring import StateMethods
 
@@ -38,7 +39,7 @@ T = TypeVar("T")
 SHUTDOWN_REASON = "robot shutting down"
 
 
-class Robot(StateMethods):
+class Robot(StateMethods, EmergencyStop):
     """A robot: runs actions, arbitrates resources, watches its state.
 
     Args:
