@@ -152,13 +152,18 @@ async def test_it_uses_the_loop_s_executor_threads_only() -> None:
     assert {t.name.rsplit("_", 1)[0] for t in new} <= {"asyncio"}  # the default executor's
 
 
+def _slow_read(seconds: float) -> str:
+    time.sleep(seconds)
+    return "read"
+
+
 @pytest.mark.virtual_time
 @pytest.mark.asyncio
 async def test_in_virtual_time_the_call_takes_no_time_and_timers_wait_for_it() -> None:
     async with Robot() as robot:
         sleeper = asyncio.create_task(robot.sleep(0.001))
         t0 = robot.time()
-        assert await robot.to_thread(lambda: time.sleep(0.05) or "read") == "read"
+        assert await robot.to_thread(_slow_read, 0.05) == "read"
         assert robot.time() == t0  # 50 ms of real time took no virtual time...
         assert not sleeper.done()  # ...and a 1 ms timer did not fire meanwhile
         await sleeper

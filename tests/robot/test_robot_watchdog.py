@@ -19,10 +19,19 @@ from typing import TYPE_CHECKING
 import pytest
 
 from pyrobots_aio import EventKind, ExecEvent, Robot, action
+from pyrobots_aio.recording import (
+    JsonlRecorder,
+    McapRecorder,
+    load,
+    render_timeline_html,
+    summarize,
+)
+from pyrobots_aio.sim import run
 from pyrobots_aio.testing import EventLog
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
+    from pathlib import Path
 
 WATCHDOG = "pyrobots_aio.watchdog"
 BOUND = 60.0  # seconds: only a broken watchdog waits this long
@@ -87,7 +96,7 @@ async def crunch(robot: Robot, reports: Reports, where: list[str]) -> str:
 async def test_a_block_is_reported_once_naming_the_action_its_line_and_stack(
     reports: Reports,
 ) -> None:
-    events, where = EventLog(), []
+    events, where = EventLog(), list[str]()
     async with Robot(actions=[crunch], instruments=[events]) as robot:
         assert await robot.crunch(reports, where) == "done"
         await asyncio.sleep(0)  # the loop turned: the end of the block is out
@@ -133,7 +142,7 @@ async def crunch_in_helper(robot: Robot, reports: Reports, where: list[str]) -> 
 async def test_the_line_is_the_user_s_innermost_not_the_standard_library_s(
     reports: Reports,
 ) -> None:
-    events, where = EventLog(), []
+    events, where = EventLog(), list[str]()
     async with Robot(actions=[crunch_in_helper], instruments=[events]) as robot:
         await robot.crunch_in_helper(reports, where)
     helper = inspect.getsourcelines(_wait_in_stdlib)[1] + 1
@@ -200,7 +209,7 @@ class _FailingBackend:
 async def test_no_watchdog_thread_outlives_a_robot_that_failed_to_start() -> None:
     before = set(threading.enumerate())
     with pytest.raises(OSError, match="ttyUSB0"):
-        async with Robot(backend=_FailingBackend()):  # type: ignore[arg-type]
+        async with Robot(backend=_FailingBackend()):
             pass
     assert set(threading.enumerate()) == before
 
@@ -250,3 +259,91 @@ async def test_a_silent_robot_s_watchdog_says_nothing_but_still_records(
         await asyncio.sleep(0)
     assert reports.records == []
     assert len(_blocked(events)) == 1
+
+
+# -- virtual time: a block is real time; a jump of the clock is not a block ------------------
+
+
+@action
+async def stall(robot: Robot, reports: Reports) -> float:
+    await robot.sleep(1.0)
+    reports.warned.wait(BOUND)
+    return robot.time()
+
+
+@pytest.mark.asyncio
+async def test_a_block_in_lockstep_simulation_is_reported_and_takes_no_virtual_time(
+    sim_robot: Robot, robot_events: EventLog, reports: Reports
+) -> None:
+    t0 = sim_robot.time()
+    assert await stall(sim_robot, reports) == t0 + 1.0  # the stall took no simulated time
+    await sim_robot.sleep(0.1)
+    [warning] = reports.at(logging.WARNING)
+    assert ": action stall#1 blocks it at " in warning
+    [event] = _blocked(robot_events)
+    assert event.time == t0 + 1.0  # stamped with the loop's clock where it blocked
+    assert event.data["duration"] >= 0.1  # type: ignore[operator]  # real seconds
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_virtual_time_jumping_ahead_is_not_a_block(reports: Reports) -> None:
+    events = EventLog()
+    async with Robot(instruments=[events]) as robot:
+        await robot.sleep(3600.0)
+        assert robot.time() >= 3600.0
+    assert reports.records == []
+    assert _blocked(events) == []
+
+
+async def _busy_program(block_threshold: float | None) -> tuple[list[tuple[str, float]], int]:
+    """Actions sleeping in virtual time, each step a few ms of real work: busy, never blocked."""
+
+    @action
+    async def worker(robot: Robot, period: float) -> None:
+        for _ in range(25):
+            end = time.perf_counter() + 0.002  # 2 ms of real work, far below a threshold
+            while time.perf_counter() < end:
+                pass
+            await robot.sleep(period)
+
+    events = EventLog()
+    async with Robot(actions=[worker], instruments=[events], block_threshold=block_threshold) as r:
+        watch = r._blockwatch
+        await asyncio.gather(*(r.worker(0.01 * (i + 1)) for i in range(8)))
+    seen = [  # (a loaded machine may stall the loop: a report of it is not the program's)
+        (f"{e.kind.value} {e.name}#{e.action}", e.time)
+        for e in events
+        if e.kind is not EventKind.LOOP_BLOCKED
+    ]
+    return seen, 0 if watch is None else watch.probes
+
+
+def test_the_watchdog_s_probes_change_nothing_a_virtual_time_program_sees() -> None:
+    watched, probes = run(_busy_program, 0.02)
+    unwatched, _ = run(_busy_program, None)
+    assert probes > 0  # the loop was probed while it ran...
+    assert watched == unwatched  # ...and every event came at the same virtual time
+
+
+# -- recordings carry the event through ------------------------------------------------------
+
+
+@pytest.mark.parametrize("recorder", [JsonlRecorder, McapRecorder])
+@pytest.mark.asyncio
+async def test_the_block_is_in_the_recording_and_replay_takes_it(
+    recorder: type[JsonlRecorder | McapRecorder], tmp_path: Path, reports: Reports
+) -> None:
+    path = tmp_path / f"run.{'jsonl' if recorder is JsonlRecorder else 'mcap'}"
+    robot, where = Robot(actions=[crunch]), list[str]()
+    with recorder(path).attach(robot):
+        async with robot:
+            await robot.crunch(reports, where)
+            await asyncio.sleep(0)
+    recording = load(path)
+    [event] = [e for e in recording.events if e.kind is EventKind.LOOP_BLOCKED]
+    assert (event.action, event.name) == (1, "crunch")
+    assert event.data["location"] == where[0]
+    assert f"line {where[0].rsplit(':', 1)[1]}, in crunch" in str(event.data["stack"])
+    assert summarize(recording).outcomes.succeeded == 1
+    assert "crunch" in render_timeline_html(recording)

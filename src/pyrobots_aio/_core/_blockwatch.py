@@ -127,7 +127,7 @@ class _Probe:
         self.answered: float | None = None
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, eq=False)  # each report is itself (list.remove)
 class _Report:
     """A block as the thread saw it, for the event the loop emits once it turns again."""
 
@@ -187,6 +187,8 @@ class BlockWatch:
         self.threshold = threshold
         self.blocks = 0
         """How many blocks were reported so far."""
+        self.probes = 0
+        """How many times the loop was probed (it was inside a callback when looked at)."""
         self._loop = loop
         self._log = log
         self._instruments = instruments
@@ -194,7 +196,9 @@ class BlockWatch:
         self._loop_thread = threading.get_ident()
         self._cond = threading.Condition()
         self._stopping = False
-        self._pending: _Report | None = None
+        # Reported blocks whose event is not out yet: the loop emits each once it turns (a
+        # second block may be reported before it does), or stop() does.
+        self._pending: list[_Report] = []
         self._thread = threading.Thread(
             target=self._watch,
             name=f"pyrobots_aio loop watchdog of {threading.current_thread().name}",
@@ -219,8 +223,8 @@ class BlockWatch:
                 "the loop watchdog thread did not stop within %s s (a log handler stuck?)",
                 JOIN_BOUND,
             )
-        if self._pending is not None:
-            self._ended(self._pending)
+        for report in list(self._pending):
+            self._ended(report)
 
     def _answer(self, probe: _Probe) -> None:
         with self._cond:
@@ -229,9 +233,9 @@ class BlockWatch:
 
     def _ended(self, report: _Report) -> None:
         """The loop turns again after a reported block: record it (on the loop's thread)."""
-        if self._pending is not report:  # already done by stop()
+        if report not in self._pending:  # already done by stop()
             return
-        self._pending = None
+        self._pending.remove(report)
         probe = report.probe
         duration = (probe.answered or time.monotonic()) - probe.posted
         self._log.info(
@@ -260,6 +264,7 @@ class BlockWatch:
                 if self._turning():
                     continue
                 probe = _Probe(time.monotonic(), self._loop.time())
+                self.probes += 1
                 try:
                     self._loop.call_soon_threadsafe(self._answer, probe)
                 except RuntimeError:  # the loop is closed: nothing left to watch
@@ -317,7 +322,7 @@ class BlockWatch:
                 report.stack.rstrip(),
             )
         self.blocks += 1
-        self._pending = report
+        self._pending.append(report)
         try:
             self._loop.call_soon_threadsafe(self._ended, report)
         except RuntimeError:  # the loop is closed; stop() emits it if it still can
