@@ -36,6 +36,10 @@ class EventKind(enum.StrEnum):
     RESOURCE_SKIPPED = "resource.skipped"
     MONITOR_FIRED = "monitor.fired"
     STATE_SAMPLE = "state.sample"
+    LOOP_BLOCKED = "loop.blocked"
+    """The event loop did not turn for ``block_threshold`` or more; emitted once it turns
+    again. ``action``/``name``: the blocking action, if one; ``data``: ``duration`` (real
+    seconds), ``threshold``, ``blocker``, ``location`` (``file:line``) and ``stack``."""
 
 
 @dataclass(frozen=True, slots=True)

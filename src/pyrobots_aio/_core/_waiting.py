@@ -16,7 +16,11 @@ from __future__ import annotations
 import asyncio
 from typing import Any
 
+# anyio imports its asyncio backend on first use: the first cancel scope, which is the
+# robot's exit, on the loop. That import takes 0.1-0.2 s, a stall of every cleanup that the
+# loop watchdog reports; importing it with the library moves it off the loop.
 import anyio
+import anyio._backends._asyncio
 
 
 class Countdown:

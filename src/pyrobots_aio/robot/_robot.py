@@ -11,8 +11,9 @@ import asyncio
 import concurrent.futures
 import logging
 import types
-from typing import TYPE_CHECKING, Any, Self, TypeVar
+from typing import TYPE_CHECKING, Any, Self, TypeVar, TypeVarTuple
 
+from .._core._blockwatch import DEFAULT_BLOCK_THRESHOLD, BlockWatch, check_block_threshold
 from .._core._instrument import Instrument, Instruments
 from .._core._logging import LogScope, check_level
 from .._core._loops import current_loop, no_asyncio_loop
@@ -27,6 +28,7 @@ from ..state import StateStore
 from ._estop import EmergencyStop
 from ._live import LiveView
 from ._monitoring import StateMethods
+from ._offloop import blocking_action, run_off_loop
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
@@ -35,6 +37,7 @@ if TYPE_CHECKING:
     from ._backend import Backend
 
 T = TypeVar("T")
+Ts = TypeVarTuple("Ts")
 
 SHUTDOWN_REASON = "robot shutting down"
 
@@ -55,6 +58,10 @@ class Robot(StateMethods, EmergencyStop):
         serve: A TCP port: while the robot runs, stream it live on 127.0.0.1 over
             Foxglove's WebSocket protocol (the ``live`` extra); 0 picks a free port,
             which ``robot.live.port`` tells once the robot runs.
+        block_threshold: Seconds the event loop may go without turning before a
+            watchdog thread logs a WARNING naming the action that blocks it, with
+            its ``file:line`` and stack, and records a ``loop.blocked`` event
+            (real time, also in lockstep simulation); None: no watchdog.
 
     Example:
         >>> import asyncio
@@ -80,7 +87,10 @@ class Robot(StateMethods, EmergencyStop):
         instruments: Iterable[Instrument] = (),
         backend: Backend | None = None,
         serve: int | None = None,
+        block_threshold: float | None = DEFAULT_BLOCK_THRESHOLD,
     ) -> None:
+        self._block_threshold = check_block_threshold(block_threshold)
+        self._blockwatch: BlockWatch | None = None
         self._attached: dict[str, Action[Any, Any, Any]] = {}
         self.dummy = dummy
         self.instruments = Instruments()
@@ -175,6 +185,7 @@ class Robot(StateMethods, EmergencyStop):
             raise no_asyncio_loop(f"run {type(self).__name__}")
         self._executive.open(loop)
         self._state.bind(loop)
+        self._watch_loop(loop)
         try:
             await self._start()
         except BaseException:
@@ -182,22 +193,25 @@ class Robot(StateMethods, EmergencyStop):
                 await self._executive.close(SHUTDOWN_REASON)
             finally:
                 self._state.bind(None)
+                self._unwatch_loop()
             raise
         return self
 
     async def __aexit__(self, *exc_info: object) -> None:
         # Each stage runs even if the one before was cancelled (it finishes its bounded
-        # wait, then re-raises): monitors, then actions, then the backend.
+        # wait, then re-raises): monitors, then actions, then the backend; the loop
+        # watchdog last, so that it sees the whole exit.
         try:
             try:
-                await self._stop_monitoring()
+                try:
+                    await self._stop_monitoring()
+                finally:
+                    await self._executive.close(SHUTDOWN_REASON)
             finally:
-                await self._executive.close(SHUTDOWN_REASON)
-        finally:
-            try:
                 await self._stop()
-            finally:
-                self._state.bind(None)
+        finally:
+            self._state.bind(None)
+            self._unwatch_loop()
 
     async def _start(self) -> None:
         """Start what the robot owns (the live view, the backend); subclasses extend this."""
@@ -275,6 +289,62 @@ class Robot(StateMethods, EmergencyStop):
             )
             raise EventLoopError(msg)
         return asyncio.run_coroutine_threadsafe(coro, loop)
+
+    # -- code that never awaits: the loop watchdog and to_thread -----------
+
+    @property
+    def block_threshold(self) -> float | None:
+        """Seconds without the loop turning that the watchdog reports (None: no watchdog)."""
+        return self._block_threshold
+
+    def _watch_loop(self, loop: asyncio.AbstractEventLoop) -> None:
+        if self._block_threshold is None:
+            return
+        executive = self._executive
+        self._blockwatch = BlockWatch(
+            loop,
+            self._block_threshold,
+            self._log_scope.logger("pyrobots_aio.watchdog"),
+            self.instruments,
+            lambda task: blocking_action(executive.running(), task),
+        )
+        self._blockwatch.start()
+
+    def _unwatch_loop(self) -> None:
+        watch, self._blockwatch = self._blockwatch, None
+        if watch is not None:
+            watch.stop()
+
+    async def to_thread(self, fn: Callable[[*Ts], T], /, *args: *Ts) -> T:
+        """Run blocking ``fn(*args)`` in a worker thread; return its result.
+
+        For code that never awaits (a blocking driver call, a long computation),
+        which on the loop would freeze every action, monitor and the simulation.
+        Cancelling the caller (its action) stops the waiting at once; the call
+        cannot be stopped and finishes in its thread: its result is dropped, and
+        an exception it raises then is logged with its traceback (logger
+        ``pyrobots_aio.robot``). It runs in the loop's default executor (no
+        thread of its own) with a copy of the caller's context.
+
+        In lockstep virtual time the call takes no simulated time: the clock
+        stands still until it returns, as for ``loop.run_in_executor``, so a
+        program sees the same ``robot.time()`` however long the thread runs;
+        also after a cancel, until the abandoned call returns.
+
+        Raises:
+            EventLoopError: Called off the robot's loop.
+            RobotNotRunningError: The robot is not running.
+
+        Example:
+            >>> import asyncio, time
+            >>> async def main() -> float:
+            ...     async with Robot() as robot:
+            ...         return await robot.to_thread(lambda s: time.sleep(s) or s, 0.01)
+            >>> asyncio.run(main())
+            0.01
+        """
+        loop = self._executive.check_loop("call robot.to_thread")
+        return await run_off_loop(loop, self._log_scope.logger("pyrobots_aio.robot"), fn, *args)
 
     # -- actions ----------------------------------------------------------
 

@@ -1,0 +1,372 @@
+"""A watchdog thread that notices when the event loop stops turning (DESIGN.md §13).
+
+asyncio cannot interrupt code that never awaits (pyRobots' trace hook could):
+a ``time.sleep``, a blocking socket or a long computation inside an action
+freezes every action, monitor and the simulation. `BlockWatch` cannot stop
+it either, but it says so, at once, with the culprit: one WARNING naming the
+action (or task, or callback) that blocks the loop, the ``file:line`` where it
+blocks and the loop thread's stack at that moment; and, once the loop turns
+again, a `EventKind.LOOP_BLOCKED` event for the recorders with the whole
+duration (and an INFO line).
+
+How it watches, without costing the loop:
+
+- Every ``threshold / 2`` the thread looks at the loop thread's innermost
+  frame (``sys._current_frames``). A loop waiting in its selector, or busy in
+  its own machinery (``_run_once`` with no callback running), is turning: no
+  more to do, and an idle loop is never woken.
+- When the loop is inside a callback, the thread probes it: it posts a
+  callback (``call_soon_threadsafe``) that stamps the time, and waits up to
+  ``threshold`` for it. Answered: the loop turns.
+- Unanswered: the loop has not turned for ``threshold``. The thread reads the
+  loop thread's stack there and then, logs the WARNING, and waits for the same
+  probe without probing again: one report per block, however long it lasts.
+
+So a block is reported between ``threshold`` and ``1.5 * threshold`` after it
+began (plus the thread's wake-up latency); blocks shorter than ``threshold``
+are not reported. Loops other than asyncio's own (uvloop) have no Python frame
+to tell idle from busy: they are probed every ``threshold / 2``.
+
+Time here is real (``time.monotonic``), never the loop's clock: a block is
+real, and a virtual-time loop that jumps ahead is not blocked. Each probe is a
+plain ready callback, so it takes no virtual time and changes no timer's order.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import os
+import sys
+import sysconfig
+import threading
+import time
+import traceback
+from asyncio import base_events, events
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from ._instrument import EventKind, ExecEvent
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterator
+    from types import FrameType
+
+    from ._instrument import Instruments
+    from ._logging import ScopedLogger
+
+DEFAULT_BLOCK_THRESHOLD = 0.1
+"""Seconds the loop may go without turning before the watchdog reports it."""
+MIN_BLOCK_THRESHOLD = 0.01
+"""The smallest threshold: the thread looks twice per threshold, so less would cost CPU."""
+JOIN_BOUND = 5.0
+"""Seconds `BlockWatch.stop` waits for the thread (only a stuck log handler could need it)."""
+
+_RUN_ONCE = base_events.BaseEventLoop._run_once.__code__  # type: ignore[attr-defined]  # one iteration
+_CALLBACK = events.Handle._run.__code__  # one callback of an iteration (timers' too)
+_LIBRARY = tuple(  # code outside the user's: the standard library and installed packages
+    {
+        os.path.join(sysconfig.get_paths()[key], "")
+        for key in ("stdlib", "platstdlib", "purelib", "platlib")
+    }
+)
+
+
+def check_block_threshold(value: object) -> float | None:
+    """Return ``value`` as a threshold in seconds, or None (no watchdog).
+
+    Raises:
+        ValueError: Not None nor a finite number of seconds of at least
+            `MIN_BLOCK_THRESHOLD`; the message names the value and the fix.
+
+    Example:
+        >>> check_block_threshold(0.25), check_block_threshold(None)
+        (0.25, None)
+    """
+    if value is None:
+        return None
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not MIN_BLOCK_THRESHOLD <= value < math.inf
+    ):
+        msg = (
+            f"block_threshold must be a number of seconds from {MIN_BLOCK_THRESHOLD} up, or None "
+            f"to turn the loop watchdog off, got {value!r}"
+        )
+        raise ValueError(msg)
+    return float(value)
+
+
+@dataclass(frozen=True, slots=True)
+class Blocker:
+    """What runs on the loop while it is blocked.
+
+    Attributes:
+        label: How the report names it (``"action crunch#3"``, ``"task 'x'"``).
+        action: The id of the blocking action, if it is one.
+        name: The name of the blocking action, if it is one.
+        frame: The outermost frame of its code (an action's body), to look
+            for the blocking ``file:line`` from there inwards.
+    """
+
+    label: str
+    action: int | None = None
+    name: str | None = None
+    frame: FrameType | None = None
+
+
+class _Probe:
+    """One question to the loop: "do you turn?" (posted by the thread, answered by the loop)."""
+
+    __slots__ = ("answered", "loop_time", "posted")
+
+    def __init__(self, posted: float, loop_time: float) -> None:
+        self.posted = posted
+        self.loop_time = loop_time
+        self.answered: float | None = None
+
+
+@dataclass(frozen=True, slots=True, eq=False)  # each report is itself (list.remove)
+class _Report:
+    """A block as the thread saw it, for the event the loop emits once it turns again."""
+
+    probe: _Probe
+    label: str
+    action: int | None
+    name: str | None
+    location: str | None
+    stack: str
+
+
+class BlockWatch:
+    """Watch ``loop`` from a thread of its own; report when it stops turning.
+
+    Create and `start` it on the loop's thread; `stop` it there too (it joins
+    the thread, so nothing outlives it).
+
+    Args:
+        loop: The event loop to watch (running in the calling thread).
+        threshold: Seconds without turning that make a block (real time).
+        log: Where the WARNING (and the INFO line at the end of a block) go.
+        instruments: Where the `EventKind.LOOP_BLOCKED` event goes.
+        blocker: Called in the watchdog thread with the task running on the
+            blocked loop (None: a plain callback); returns the action it runs,
+            if any. It must only read.
+
+    Example:
+        >>> import asyncio, logging, time
+        >>> from pyrobots_aio._core._instrument import Instruments
+        >>> from pyrobots_aio._core._logging import LogScope
+        >>> async def main() -> list[str]:
+        ...     events = []
+        ...     class Keep:
+        ...         def on_event(self, event: ExecEvent) -> None:
+        ...             events.append(event.kind.value)
+        ...     hub = Instruments()
+        ...     hub.add(Keep())
+        ...     log = LogScope().logger("pyrobots_aio.watchdog")
+        ...     watch = BlockWatch(asyncio.get_running_loop(), 0.05, log, hub)
+        ...     watch.start()
+        ...     time.sleep(0.3)  # a block (never do this in an action)
+        ...     await asyncio.sleep(0.01)  # the loop turns: the event is emitted
+        ...     watch.stop()
+        ...     return events
+        >>> asyncio.run(main())
+        ['loop.blocked']
+    """
+
+    def __init__(
+        self,
+        loop: asyncio.AbstractEventLoop,
+        threshold: float,
+        log: ScopedLogger,
+        instruments: Instruments,
+        blocker: Callable[[asyncio.Task[object] | None], Blocker | None] | None = None,
+    ) -> None:
+        self.threshold = threshold
+        self.blocks = 0
+        """How many blocks were reported so far."""
+        self.probes = 0
+        """How many times the loop was probed (it was inside a callback when looked at)."""
+        self._loop = loop
+        self._log = log
+        self._instruments = instruments
+        self._blocker = blocker
+        self._loop_thread = threading.get_ident()
+        self._cond = threading.Condition()
+        self._stopping = False
+        # Reported blocks whose event is not out yet: the loop emits each once it turns (a
+        # second block may be reported before it does), or stop() does.
+        self._pending: list[_Report] = []
+        self._thread = threading.Thread(
+            target=self._watch,
+            name=f"pyrobots_aio loop watchdog of {threading.current_thread().name}",
+            daemon=True,  # never holds the interpreter's exit, whatever happens
+        )
+
+    # -- the loop's side -------------------------------------------------------
+
+    def start(self) -> None:
+        """Start the thread."""
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop and join the thread; emit the event of a block that ended but is not out yet."""
+        with self._cond:
+            self._stopping = True
+            self._cond.notify_all()
+        # The thread leaves its waits at once; only a report being logged can hold it.
+        self._thread.join(JOIN_BOUND)
+        if self._thread.is_alive():
+            self._log.error(
+                "the loop watchdog thread did not stop within %s s (a log handler stuck?)",
+                JOIN_BOUND,
+            )
+        for report in list(self._pending):
+            self._ended(report)
+
+    def _answer(self, probe: _Probe) -> None:
+        with self._cond:
+            probe.answered = time.monotonic()
+            self._cond.notify_all()
+
+    def _ended(self, report: _Report) -> None:
+        """The loop turns again after a reported block: record it (on the loop's thread)."""
+        if report not in self._pending:  # already done by stop()
+            return
+        self._pending.remove(report)
+        probe = report.probe
+        duration = (probe.answered or time.monotonic()) - probe.posted
+        self._log.info(
+            "the event loop turned again after %.3f s (blocked by %s at %s)",
+            duration,
+            report.label,
+            report.location or "an unknown place",
+        )
+        if self._instruments:
+            data = {
+                "duration": duration,
+                "threshold": self.threshold,
+                "blocker": report.label,
+                "location": report.location,
+                "stack": report.stack,
+            }
+            self._instruments.emit(
+                ExecEvent(EventKind.LOOP_BLOCKED, probe.loop_time, report.action, report.name, data)
+            )
+
+    # -- the thread's side -----------------------------------------------------
+
+    def _watch(self) -> None:
+        try:
+            while self._rest(self.threshold / 2):
+                if self._turning():
+                    continue
+                probe = _Probe(time.monotonic(), self._loop.time())
+                self.probes += 1
+                try:
+                    self._loop.call_soon_threadsafe(self._answer, probe)
+                except RuntimeError:  # the loop is closed: nothing left to watch
+                    return
+                if not self._wait_for(probe, self.threshold):
+                    self._report(probe)
+                    self._wait_for(probe, None)
+        except Exception:  # a bug here must not pass silently
+            self._log.exception("the loop watchdog failed; the loop is no longer watched")
+
+    def _rest(self, seconds: float) -> bool:
+        """Wait ``seconds``; False if asked to stop meanwhile."""
+        with self._cond:
+            return not self._cond.wait_for(lambda: self._stopping, seconds)
+
+    def _wait_for(self, probe: _Probe, timeout: float | None) -> bool:
+        """Wait until the loop answers ``probe`` (or stop); False if ``timeout`` ran out first."""
+        with self._cond:
+            return self._cond.wait_for(
+                lambda: probe.answered is not None or self._stopping, timeout
+            )
+
+    def _turning(self) -> bool:
+        """Whether the loop thread is outside any callback now (waiting, or between them)."""
+        frame = sys._current_frames().get(self._loop_thread)
+        while frame is not None:
+            code = frame.f_code
+            if code is _CALLBACK:
+                return False
+            if code is _RUN_ONCE:
+                return True
+            frame = frame.f_back
+        return False  # no asyncio iteration on the stack (another loop): probe it
+
+    def _report(self, probe: _Probe) -> None:
+        """Log the block the loop is in now (on the watchdog's thread)."""
+        report = self._look(probe)
+        blocked = time.monotonic() - probe.posted
+        if probe.answered is not None:  # it turned while we looked: the stack may be elsewhere
+            report = _Report(probe, report.label, report.action, report.name, None, "")
+            self._log.warning(
+                "the event loop did not turn for %.3f s (it turned again before the watchdog "
+                "could see where)",
+                blocked,
+            )
+        else:
+            self._log.warning(
+                "the event loop has not turned for %.3f s: %s blocks it at %s. Code that "
+                "never awaits stops every action, monitor and the simulation: await instead, "
+                "or run the blocking call off the loop with robot.to_thread(fn, *args). "
+                "The blocking stack (most recent call last):\n%s",
+                blocked,
+                report.label,
+                report.location or "an unknown place",
+                report.stack.rstrip(),
+            )
+        self.blocks += 1
+        self._pending.append(report)
+        try:
+            self._loop.call_soon_threadsafe(self._ended, report)
+        except RuntimeError:  # the loop is closed; stop() emits it if it still can
+            return
+
+    def _look(self, probe: _Probe) -> _Report:
+        """What runs on the blocked loop, where, and its stack (frames are not kept)."""
+        frames = list(_callback_frames(sys._current_frames().get(self._loop_thread)))
+        task = asyncio.current_task(self._loop)
+        blocker = self._blocker(task) if self._blocker is not None else None
+        if blocker is None:
+            blocker = Blocker("a callback" if task is None else f"task {task.get_name()!r}")
+        location = _location(frames, blocker.frame)
+        stack = traceback.extract_stack(frames[0], len(frames)) if frames else []
+        return _Report(
+            probe,
+            blocker.label,
+            blocker.action,
+            blocker.name,
+            location,
+            "".join(traceback.format_list(stack)),
+        )
+
+
+def _callback_frames(frame: FrameType | None) -> Iterator[FrameType]:
+    """The frames of the running callback, innermost first (the whole stack if none)."""
+    while frame is not None and frame.f_code is not _CALLBACK:
+        yield frame
+        frame = frame.f_back
+
+
+def _location(frames: list[FrameType], outer: FrameType | None) -> str | None:
+    """The ``file:line`` where the loop blocks: the innermost frame of the user's code.
+
+    Frames of the standard library and installed packages are passed over (a
+    ``socket.recv``, a ``requests.get``), to the line that called them; with
+    ``outer`` (an action's body) the search stops there, and falls back to it.
+    """
+    if outer is not None and outer in frames:
+        frames = frames[: frames.index(outer) + 1]
+    else:
+        outer = frames[0] if frames else None
+    for frame in frames:
+        filename = frame.f_code.co_filename
+        if not filename.startswith(_LIBRARY) and not filename.startswith("<"):
+            return f"{filename}:{frame.f_lineno}"
+    return None if outer is None else f"{outer.f_code.co_filename}:{outer.f_lineno}"

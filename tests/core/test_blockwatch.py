@@ -1,0 +1,113 @@
+"""BlockWatch on a bare asyncio loop: idle loops are left alone, each block is one event."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+from typing import TYPE_CHECKING
+
+import pytest
+
+from pyrobots_aio import EventKind, ExecEvent
+from pyrobots_aio._core._blockwatch import Blocker, BlockWatch
+from pyrobots_aio._core._instrument import Instruments
+from pyrobots_aio._core._logging import LogScope
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+
+BOUND = 60.0
+
+
+class Kept:
+    def __init__(self) -> None:
+        self.events: list[ExecEvent] = []
+
+    def on_event(self, event: ExecEvent) -> None:
+        self.events.append(event)
+
+
+class Warned(logging.Handler):
+    def __init__(self) -> None:
+        super().__init__(logging.DEBUG)
+        self.records: list[logging.LogRecord] = []
+        self.warned = threading.Event()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+        if record.levelno >= logging.WARNING:
+            self.warned.set()
+
+
+@pytest.fixture
+def warned() -> Iterator[Warned]:
+    handler = Warned()
+    logger = logging.getLogger("pyrobots_aio.watchdog")
+    logger.addHandler(handler)
+    yield handler
+    logger.removeHandler(handler)
+
+
+def _watch(threshold: float, blocker: object = None) -> tuple[BlockWatch, Kept]:
+    kept, hub = Kept(), Instruments()
+    hub.add(kept)
+    log = LogScope().logger("pyrobots_aio.watchdog")
+    return BlockWatch(asyncio.get_running_loop(), threshold, log, hub, blocker), kept  # type: ignore[arg-type]
+
+
+@pytest.mark.asyncio
+async def test_an_idle_loop_is_not_probed() -> None:
+    watch, kept = _watch(0.02)
+    watch.start()
+    try:
+        await asyncio.sleep(0.5)  # 25 looks at a loop waiting in its selector
+    finally:
+        watch.stop()
+    assert watch.probes <= 1  # (one could catch the loop in the callback that wakes it)
+    assert kept.events == []
+
+
+@pytest.mark.asyncio
+async def test_stop_right_after_a_block_emits_its_event_once(warned: Warned) -> None:
+    watch, kept = _watch(0.05)
+    watch.start()
+    assert warned.warned.wait(BOUND)  # blocks this very callback until it is reported
+    watch.stop()  # before the loop turned: stop() emits the event itself
+    assert [e.kind for e in kept.events] == [EventKind.LOOP_BLOCKED]
+    await asyncio.sleep(0.01)  # the loop turns: the queued emission finds it done
+    [event] = kept.events
+    assert event.data["blocker"] == f"task {asyncio.current_task().get_name()!r}"  # type: ignore[union-attr]
+    assert not watch._thread.is_alive()
+
+
+@pytest.mark.asyncio
+async def test_the_blocker_hook_names_the_culprit(warned: Warned) -> None:
+    watch, kept = _watch(0.05, lambda task: Blocker("the arm driver", 7, "reach"))
+    watch.start()
+    try:
+        assert warned.warned.wait(BOUND)
+        await asyncio.sleep(0)
+    finally:
+        watch.stop()
+    assert ": the arm driver blocks it at " in warned.records[0].getMessage()
+    [event] = kept.events
+    assert (event.action, event.name, event.data["blocker"]) == (7, "reach", "the arm driver")
+
+
+@pytest.mark.asyncio
+async def test_a_failure_of_the_watchdog_itself_is_logged_not_silent(warned: Warned) -> None:
+    def broken(task: object) -> Blocker:
+        raise LookupError("no such action table")
+
+    watch, _ = _watch(0.05, broken)
+    watch.start()
+    try:
+        assert warned.warned.wait(BOUND)  # its ERROR ends the block
+        await asyncio.sleep(0)
+    finally:
+        watch.stop()
+    [record] = warned.records
+    assert record.getMessage() == "the loop watchdog failed; the loop is no longer watched"
+    assert record.exc_info is not None
+    assert isinstance(record.exc_info[1], LookupError)
