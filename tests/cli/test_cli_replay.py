@@ -126,7 +126,11 @@ async def _record_mcap(path: Path) -> None:
         ),
         (
             ("demo", "random-walk", "--seed", "one"),
-            "error: argument --seed: invalid int value: 'one'",
+            "error: argument --seed: expected a non-negative integer, got 'one'",
+        ),
+        (  # was a 30-line traceback from the simulator
+            ("demo", "random-walk", "--seed", "-1"),
+            "error: argument --seed: expected a non-negative integer, got '-1'",
         ),
         (("fly",), "error: argument COMMAND: invalid choice: 'fly'"),
     ],
