@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import io
 import logging
 import subprocess
@@ -55,6 +56,45 @@ async def test_a_line_has_the_loop_time_level_logger_and_action(
     assert out.getvalue().splitlines() == [
         "    1.500  INFO    sim.random_walk  bump#1  backing off 0.15 m",
         "    1.500  WARNING sim.random_walk  outside any action",
+    ]
+
+
+class BootClockLoop(asyncio.SelectorEventLoop):
+    """An ordinary loop whose clock reads as a real one may: seconds since the machine booted."""
+
+    now = 86_400.0
+
+    def time(self) -> float:
+        return self.now
+
+
+async def _log_twice(loop: BootClockLoop) -> None:
+    log.info("first")
+    loop.now += 2.5
+    log.info("2.5 s later")
+
+
+def test_on_an_ordinary_loop_times_count_from_the_first_record(
+    handler: tuple[ConsoleHandler, io.StringIO],
+) -> None:
+    # Before: the loop's raw clock (86400.000, 86402.500) beside the demo's times since start.
+    _, out = handler
+    with asyncio.Runner(loop_factory=BootClockLoop) as runner:
+        runner.run(_log_twice(runner.get_loop()))  # type: ignore[arg-type]
+    assert out.getvalue().splitlines() == [
+        "    0.000  INFO    sim.random_walk  first",
+        "    2.500  INFO    sim.random_walk  2.5 s later",
+    ]
+
+
+def test_a_set_start_counts_from_there(handler: tuple[ConsoleHandler, io.StringIO]) -> None:
+    installed, out = handler
+    installed.start = 86_000.0  # what the demo sets: the robot's start on the loop's clock
+    with asyncio.Runner(loop_factory=BootClockLoop) as runner:
+        runner.run(_log_twice(runner.get_loop()))  # type: ignore[arg-type]
+    assert out.getvalue().splitlines() == [
+        "  400.000  INFO    sim.random_walk  first",
+        "  402.500  INFO    sim.random_walk  2.5 s later",
     ]
 
 
