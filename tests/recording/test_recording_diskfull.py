@@ -48,8 +48,8 @@ def small_disk(tmp_path: Path) -> Iterator[Path]:
         pytest.skip(f"cannot mount a small tmpfs here: {mounted.stderr.strip()}")
     try:
         yield where
-    finally:
-        subprocess.run(["umount", str(where)], check=True)
+    finally:  # lazily if a file on it is still open: never leave the mount behind
+        subprocess.run(["umount", "--lazy", str(where)], check=True)
 
 
 @action
