@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import io
 import logging
 import subprocess
@@ -53,8 +54,47 @@ async def test_a_line_has_the_loop_time_level_logger_and_action(
         await bump(robot)
         log.warning("outside any action")
     assert out.getvalue().splitlines() == [
-        "   1.500 INFO    sim.random_walk  bump#1  backing off 0.15 m",
-        "   1.500 WARNING sim.random_walk  outside any action",
+        "    1.500  INFO    sim.random_walk  bump#1  backing off 0.15 m",
+        "    1.500  WARNING sim.random_walk  outside any action",
+    ]
+
+
+class BootClockLoop(asyncio.SelectorEventLoop):
+    """An ordinary loop whose clock reads as a real one may: seconds since the machine booted."""
+
+    now = 86_400.0
+
+    def time(self) -> float:
+        return self.now
+
+
+async def _log_twice(loop: BootClockLoop) -> None:
+    log.info("first")
+    loop.now += 2.5
+    log.info("2.5 s later")
+
+
+def test_on_an_ordinary_loop_times_count_from_the_first_record(
+    handler: tuple[ConsoleHandler, io.StringIO],
+) -> None:
+    # Before: the loop's raw clock (86400.000, 86402.500) beside the demo's times since start.
+    _, out = handler
+    with asyncio.Runner(loop_factory=BootClockLoop) as runner:
+        runner.run(_log_twice(runner.get_loop()))  # type: ignore[arg-type]
+    assert out.getvalue().splitlines() == [
+        "    0.000  INFO    sim.random_walk  first",
+        "    2.500  INFO    sim.random_walk  2.5 s later",
+    ]
+
+
+def test_a_set_start_counts_from_there(handler: tuple[ConsoleHandler, io.StringIO]) -> None:
+    installed, out = handler
+    installed.start = 86_000.0  # what the demo sets: the robot's start on the loop's clock
+    with asyncio.Runner(loop_factory=BootClockLoop) as runner:
+        runner.run(_log_twice(runner.get_loop()))  # type: ignore[arg-type]
+    assert out.getvalue().splitlines() == [
+        "  400.000  INFO    sim.random_walk  first",
+        "  402.500  INFO    sim.random_walk  2.5 s later",
     ]
 
 
@@ -67,7 +107,7 @@ def test_without_a_loop_the_time_is_blank_and_tracebacks_follow(
     except ValueError:
         log.exception("it broke")
     lines = out.getvalue().splitlines()
-    assert lines[0] == "         ERROR   sim.random_walk  it broke"
+    assert lines[0] == "           ERROR   sim.random_walk  it broke"
     assert lines[1] == "Traceback (most recent call last):"
     assert lines[-1] == "ValueError: boom"
 
@@ -86,12 +126,12 @@ def test_levels_are_coloured_on_a_terminal_unless_no_color(
     log.info("no colour wanted")
     installed.colour = True
     log.info("forced")
-    assert out.getvalue() == "         DEBUG   sim.random_walk  plain: not a terminal\n"
+    assert out.getvalue() == "           DEBUG   sim.random_walk  plain: not a terminal\n"
     assert terminal.getvalue().splitlines() == [
-        "         \x1b[2mDEBUG  \x1b[0m sim.random_walk  dim",
-        "         \x1b[31mERROR  \x1b[0m sim.random_walk  red",
-        "         INFO    sim.random_walk  no colour wanted",
-        "         \x1b[32mINFO   \x1b[0m sim.random_walk  forced",
+        "           \x1b[2mDEBUG  \x1b[0m sim.random_walk  dim",
+        "           \x1b[31mERROR  \x1b[0m sim.random_walk  red",
+        "           INFO    sim.random_walk  no colour wanted",
+        "           \x1b[32mINFO   \x1b[0m sim.random_walk  forced",
     ]
 
 
@@ -107,7 +147,7 @@ def test_install_replaces_the_previous_handler_and_sets_the_level() -> None:
         assert target.level == logging.WARNING
         target.info("hidden")
         target.warning("shown")
-        assert out.getvalue() == "         WARNING test_install  shown\n"
+        assert out.getvalue() == "           WARNING test_install  shown\n"
     finally:
         target.removeHandler(second)
         target.setLevel(logging.NOTSET)

@@ -162,7 +162,11 @@ def test_replay_prints_no_terminal_escape_from_a_recording(tmp_path: Path) -> No
         ),
         (
             ("demo", "random-walk", "--seed", "one"),
-            "error: argument --seed: invalid int value: 'one'",
+            "error: argument --seed: expected a non-negative integer, got 'one'",
+        ),
+        (  # was a 30-line traceback from the simulator
+            ("demo", "random-walk", "--seed", "-1"),
+            "error: argument --seed: expected a non-negative integer, got '-1'",
         ),
         (("fly",), "error: argument COMMAND: invalid choice: 'fly'"),
     ],

@@ -40,7 +40,13 @@ def test_exported_names_are_pinned() -> None:
         "shown",
         "summarize",
     ]
-    assert pyrobots_aio.cli.__all__ == ["ConsoleHandler", "install_console_handler", "main"]
+    assert pyrobots_aio.cli.__all__ == [
+        "ConsoleHandler",
+        "SignalStop",
+        "install_console_handler",
+        "main",
+        "stop_on_signals",
+    ]
     for package in (pyrobots_aio.recording, pyrobots_aio.cli):
         for name in package.__all__:
             assert getattr(package, name) is not None

@@ -1,14 +1,21 @@
-"""The console log handler: coloured levels, short logger names, loop time, action names.
+"""The console log handler: coloured levels, short logger names, time since start, actions.
 
 The library never installs it; the ``pyrobots-aio`` command and the examples
 do, through `install_console_handler`. A line reads::
 
-    12.340 INFO    sim.random_walk  move#7  move 3 interrupted: preempted by ...
+       12.340  INFO    sim.random_walk  move#7  move 3 interrupted: preempted by ...
 
-that is: the loop time (``robot.time()``: simulation time in lockstep; blank
-when no loop runs), the level, the logger name without its ``pyrobots_aio.``
-prefix, the running action (``name#id``, from
-`pyrobots_aio.actions.current_action`) and the message.
+that is: the seconds since start on the loop's clock (blank when no loop
+runs), the level, the logger name without its ``pyrobots_aio.`` prefix, the
+running action (``name#id``, from `pyrobots_aio.actions.current_action`) and
+the message. The time column is as wide as the demo's event lines', so that
+the two kinds of line align.
+
+Since start: since `ConsoleHandler.start` when it is set (the demo sets it
+to the robot's start); else, on a virtual-time loop, its clock as it is
+(simulation time, which starts at 0), and on an ordinary loop, whose clock
+counts from an arbitrary point (often the machine's boot), since the first
+record logged on that loop.
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ import asyncio
 import logging
 import os
 import sys
+import weakref
 from typing import TYPE_CHECKING, Protocol
 
 from pyrobots_aio.actions import current_action
@@ -45,6 +53,8 @@ LEVEL_COLOURS: Mapping[int, str] = {
 }
 """ANSI colour of each level's name."""
 NAME_WIDTH = 18
+TIME_WIDTH = 9
+"""Characters of the time column (``{:9.3f}``), the demo's event lines' included."""
 
 
 def wants_colour(stream: Stream) -> bool:
@@ -74,11 +84,22 @@ def short_name(name: str, width: int = NAME_WIDTH) -> str:
     return ".".join(parts)
 
 
-def _loop_time() -> float | None:
-    try:
-        return asyncio.get_running_loop().time()
-    except RuntimeError:
-        return None
+def format_time(seconds: float | None) -> str:
+    """The time column: seconds with milliseconds, right-aligned; blank for None.
+
+    Example:
+        >>> format_time(12.34)
+        '   12.340'
+        >>> format_time(None) == " " * TIME_WIDTH
+        True
+    """
+    return " " * TIME_WIDTH if seconds is None else f"{seconds:{TIME_WIDTH}.3f}"
+
+
+def _is_virtual(loop: asyncio.AbstractEventLoop) -> bool:
+    from pyrobots_aio.sim import is_virtual  # on demand: plain programs never need the simulator
+
+    return is_virtual(loop)
 
 
 class ConsoleHandler(logging.Handler):
@@ -89,6 +110,7 @@ class ConsoleHandler(logging.Handler):
         level: The handler's level.
         colour: Colour the level names; None decides per stream: only on a
             terminal, and never when ``NO_COLOR`` is set.
+        start: The loop time shown as 0 (settable; see the module for None).
 
     Example:
         >>> import io, logging
@@ -97,7 +119,7 @@ class ConsoleHandler(logging.Handler):
         >>> log.addHandler(ConsoleHandler(out))
         >>> log.warning("wheels %s", "stalled")
         >>> print(out.getvalue(), end="")
-                 WARNING demo  wheels stalled
+                   WARNING demo  wheels stalled
         >>> log.handlers.clear()
     """
 
@@ -107,11 +129,15 @@ class ConsoleHandler(logging.Handler):
         level: int | str = logging.NOTSET,
         *,
         colour: bool | None = None,
+        start: float | None = None,
     ) -> None:
         super().__init__(level)
         self._stream = stream
         self.colour = colour
+        self.start = start
         self._plain = logging.Formatter()
+        self._loop: weakref.ref[asyncio.AbstractEventLoop] | None = None
+        self._origin = 0.0
 
     @property
     def stream(self) -> Stream:
@@ -122,17 +148,30 @@ class ConsoleHandler(logging.Handler):
     def stream(self, stream: Stream | None) -> None:
         self._stream = stream
 
+    def since_start(self) -> float | None:
+        """Seconds since start on the running loop's clock (None when no loop runs)."""
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:
+            return None
+        now = loop.time()
+        if self.start is not None:
+            return now - self.start
+        if self._loop is None or self._loop() is not loop:  # a loop seen for the first time
+            self._loop = weakref.ref(loop)
+            self._origin = 0.0 if _is_virtual(loop) else now
+        return now - self._origin
+
     def format(self, record: logging.LogRecord) -> str:
-        """``time LEVEL logger  action  message`` (and the traceback, if any)."""
-        now = _loop_time()
-        stamp = f"{now:8.3f}" if now is not None else " " * 8
+        """``time  LEVEL logger  action  message`` (and the traceback, if any)."""
+        stamp = format_time(self.since_start())
         level = f"{record.levelname:<7}"
         colour = self.colour if self.colour is not None else wants_colour(self.stream)
         if colour:
             level = f"{LEVEL_COLOURS.get(record.levelno, '')}{level}{RESET}"
         handle = current_action.get()
         who = f"  {handle.name}#{handle.id}" if handle is not None else ""
-        text = f"{stamp} {level} {short_name(record.name)}{who}  {record.getMessage()}"
+        text = f"{stamp}  {level} {short_name(record.name)}{who}  {record.getMessage()}"
         if record.exc_info:
             text += "\n" + self._plain.formatException(record.exc_info)
         if record.stack_info:
@@ -155,6 +194,7 @@ def install_console_handler(
     logger: str | None = None,
     stream: Stream | None = None,
     colour: bool | None = None,
+    start: float | None = None,
 ) -> ConsoleHandler:
     """Log to the console through a `ConsoleHandler`, replacing one installed before.
 
@@ -164,6 +204,7 @@ def install_console_handler(
             program's own loggers show too).
         stream: Where to write (default: standard error).
         colour: See `ConsoleHandler`.
+        start: See `ConsoleHandler`.
 
     Returns:
         The handler, to remove it later (``logging.getLogger().removeHandler(h)``).
@@ -176,7 +217,7 @@ def install_console_handler(
     target = logging.getLogger(logger)
     for old in [h for h in target.handlers if isinstance(h, ConsoleHandler)]:
         target.removeHandler(old)
-    handler = ConsoleHandler(stream, colour=colour)
+    handler = ConsoleHandler(stream, colour=colour, start=start)
     target.addHandler(handler)
     target.setLevel(level)
     return handler

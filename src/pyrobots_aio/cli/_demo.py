@@ -7,6 +7,11 @@ view in Foxglove. At the end: the walk's report and the summary of its
 recording (the file of ``--record``, JSON Lines or MCAP by its extension, else
 an in-memory recording). Every state key and the pose are recorded at the
 control rate.
+
+Ctrl-C and SIGTERM stop the walk in order (`stop_on_signals`): the first
+shuts the robot down (its cleanup bounded, the wheels stopped, the recording
+closed), a second cuts the cleanup short. A closed output pipe (``| head``)
+stops the walk the same way.
 """
 
 from __future__ import annotations
@@ -14,6 +19,8 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import errno
+import signal
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
@@ -26,6 +33,7 @@ from pyrobots_aio.recording import (
     load,
     summarize,
 )
+from pyrobots_aio.robot import SignalStop, stop_on_signals
 
 from ._live import EventLines, LiveStatus, Tally
 
@@ -70,16 +78,26 @@ def recording_path(text: str) -> str:
     return text
 
 
-def port_number(text: str) -> int:
-    """Argparse type: a TCP port number (0: any free port)."""
+def _integer(text: str, low: int, high: int | None, expected: str) -> int:
+    """``text`` as an integer from ``low`` to ``high`` (None: unbounded), or a usage error."""
     try:
         value = int(text)
     except ValueError:
-        value = -1
-    if not 0 <= value <= 65535:
-        msg = f"expected a TCP port number from 0 to 65535, got {text!r}"
+        value = low - 1
+    if value < low or (high is not None and value > high):
+        msg = f"expected {expected}, got {text!r}"
         raise argparse.ArgumentTypeError(msg)
     return value
+
+
+def port_number(text: str) -> int:
+    """Argparse type: a TCP port number (0: any free port)."""
+    return _integer(text, 0, 65535, "a TCP port number from 0 to 65535")
+
+
+def seed(text: str) -> int:
+    """Argparse type: a non-negative integer (what seeds the simulator and the moves)."""
+    return _integer(text, 0, None, "a non-negative integer")
 
 
 def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -121,7 +139,7 @@ def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
         f"(default {DEFAULT_PORT}; the live extra); use it with --realtime to watch it",
     )
     walk.add_argument(
-        "--seed", type=int, default=0, help="seeds the sensors and the moves (default: 0)"
+        "--seed", type=seed, default=0, help="seeds the sensors and the moves (default: 0)"
     )
     walk.set_defaults(command=run_random_walk)
 
@@ -134,23 +152,37 @@ class _Show:
         self.handler = handler
         self.wall_start = time.perf_counter()  # for the speed-up shown; never used for timing
         self.start = 0.0
+        self._out = out
+        self._saved = handler.stream, handler.start
+        self.pipe_closed = False
         if out.isatty():
             self.live: LiveStatus | None = LiveStatus(out, self._headline)
             self.events = EventLines(self.live.line, 0.0, verbose=False)
-            self._saved = handler.stream
             handler.stream = self.live  # log lines scroll above the block
         else:
             self.live = None
-            self.events = EventLines(
-                lambda line: print(line, file=out, flush=True), 0.0, verbose=True
-            )
+            self.events = EventLines(self._print, 0.0, verbose=True)
         self._robot: Robot | None = None
+        self._task: asyncio.Task[object] | None = None
 
     def attach(self, robot: Robot) -> None:
         self._robot = robot
+        self._task = asyncio.current_task()
+        # Every time shown counts from the robot's start: event lines, log lines, headline.
         self.start = self.events.start = asyncio.get_running_loop().time()
+        self.handler.start = self.start
         robot.instruments.add(self.tally)
         robot.instruments.add(self.events)
+
+    def _print(self, line: str) -> None:
+        if self.pipe_closed:
+            return
+        try:
+            print(line, file=self._out, flush=True)
+        except BrokenPipeError:  # the reader went away (``| head``): stop the walk in order
+            self.pipe_closed = True
+            if self._task is not None:
+                self._task.cancel("the output pipe was closed")
 
     def showing(self, robot: Robot) -> contextlib.AbstractAsyncContextManager[None]:
         return self.live.showing(robot) if self.live is not None else contextlib.nullcontext()
@@ -166,8 +198,7 @@ class _Show:
         )
 
     def close(self) -> None:
-        if self.live is not None:
-            self.handler.stream = self._saved
+        self.handler.stream, self.handler.start = self._saved
 
 
 def _recorder(options: argparse.Namespace) -> Recorder:
@@ -180,7 +211,7 @@ def _recorder(options: argparse.Namespace) -> Recorder:
 
 
 def _walk(
-    options: argparse.Namespace, recorder: Recorder, show: _Show
+    options: argparse.Namespace, recorder: Recorder, show: _Show, stopping: SignalStop
 ) -> Callable[[], Coroutine[Any, Any, WalkReport]]:
     from pyrobots_aio.sim import SimRobot
     from pyrobots_aio.sim.random_walk import random_walk
@@ -189,12 +220,13 @@ def _walk(
 
     async def main() -> WalkReport:
         robot = SimRobot(seed=options.seed, realtime=options.realtime, serve=options.serve)
-        show.attach(robot)
-        with recorder.attach(robot):
-            async with robot, show.showing(robot):
-                return await random_walk(
-                    robot, moves=moves, duration=options.duration, seed=options.seed
-                )
+        with stopping, recorder.attach(robot):
+            async with robot:
+                show.attach(robot)  # times shown count from here, as the recording's do
+                async with show.showing(robot):
+                    return await random_walk(
+                        robot, moves=moves, duration=options.duration, seed=options.seed
+                    )
 
     return main
 
@@ -217,9 +249,19 @@ def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> in
 
     recorder = _recorder(options)
     show = _Show(out, options.log_handler)
+    stopping = stop_on_signals()
     try:
-        main = _walk(options, recorder, show)
+        main = _walk(options, recorder, show, stopping)
         report = asyncio.run(main()) if options.realtime else run(main)
+    except asyncio.CancelledError:
+        if show.pipe_closed:
+            raise BrokenPipeError(errno.EPIPE, "the output pipe was closed") from None
+        raise
+    except BaseException:
+        if stopping.received:  # the process is on its way out: later signals change nothing
+            for signum in stopping.handled:
+                signal.signal(signum, signal.SIG_IGN)
+        raise
     finally:
         recorder.close()
         show.close()

@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, TextIO
 
 from pyrobots_aio import EventKind
 
+from ._console import format_time
+
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator, Callable
 
@@ -43,7 +45,8 @@ class EventLines:
 
     Args:
         write: Called with each line (no newline).
-        start: The loop time shown as 0.
+        start: The loop time shown as 0 (the robot's start: the demo shows every
+            time since then, its log lines' too).
         verbose: Also report actions starting and succeeding (plain mode); else
             only cancellations, failures, skips, preemptions and monitor firings.
     """
@@ -61,7 +64,7 @@ class EventLines:
         """Write the line for ``event``, if it deserves one."""
         text = self._describe(event)
         if text is not None:
-            self._write(f"{event.time - self.start:9.3f}  {text}")
+            self._write(f"{format_time(event.time - self.start)}  {text}")
 
     def _describe(self, event: ExecEvent) -> str | None:
         kind, data = event.kind, event.data

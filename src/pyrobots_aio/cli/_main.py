@@ -1,22 +1,30 @@
 """The ``pyrobots-aio`` command: argument parsing and exit codes.
 
 Exit codes: 0 success, 1 runtime failure (a corrupt recording, an error of the
-library or of the file system), 2 usage error (argparse), 130 interrupted.
+library or of the file system), 2 usage error (argparse), 130 interrupted
+(Ctrl-C), 141 the output pipe was closed (``| head``: quietly, as for any
+command that SIGPIPE ends), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
+import os
+import signal
 import sys
 import traceback
+from typing import TextIO
 
 from pyrobots_aio import PyRobotsError, __version__
 
 from . import _demo, _replay, _sim_node
 from ._console import install_console_handler
 
-INTERRUPTED = 130
+INTERRUPTED = 128 + signal.SIGINT
+PIPE_CLOSED = 128 + signal.SIGPIPE
+TERMINATED = 128 + signal.SIGTERM
 
 
 def parser() -> argparse.ArgumentParser:
@@ -65,6 +73,14 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("pyrobots-aio: interrupted", file=err)
         return INTERRUPTED
+    except SystemExit as exit_:  # SIGTERM, through stop_on_signals
+        if exit_.code != TERMINATED:
+            raise
+        print("pyrobots-aio: terminated", file=err)
+        return TERMINATED
+    except BrokenPipeError:
+        _silence(out)
+        return PIPE_CLOSED
     except (PyRobotsError, OSError) as exc:
         print(f"pyrobots-aio: error: {exc}", file=err)
         return 1
@@ -75,3 +91,16 @@ def main(argv: list[str] | None = None) -> int:
         root.removeHandler(options.log_handler)
         root.setLevel(saved)
     return code
+
+
+def _silence(out: TextIO) -> None:
+    """Point ``out``'s file descriptor at /dev/null: its reader is gone.
+
+    Without it, Python's own flush of standard output at exit fails on the
+    closed pipe again and prints ``Exception ignored ... BrokenPipeError``.
+    """
+    with contextlib.suppress(OSError, ValueError):  # no file descriptor (a StringIO)
+        fd = out.fileno()
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)

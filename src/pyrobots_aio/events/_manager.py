@@ -16,7 +16,7 @@ from ._conditions import (
     parse,
 )
 from ._monitor import EventMonitor, Host, label
-from ._watch import Feed, check_buffer, iterate
+from ._watch import Feed, Watch, check_buffer
 
 if TYPE_CHECKING:
     from .._core._instrument import Instruments
@@ -194,7 +194,7 @@ class EventManager:
         self._state.require(key)
         feed = Feed(host.loop, self._state, key, size, host.log)
         self._feeds[feed] = None
-        return iterate(feed, self._forget_feed)
+        return Watch(feed, self._forget_feed)
 
     def _forget_feed(self, feed: Feed) -> None:
         self._feeds.pop(feed, None)

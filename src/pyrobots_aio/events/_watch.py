@@ -5,19 +5,20 @@ code runs inside the write); the async generator hands them out in order. If
 the consumer falls behind by more than ``buffer`` values, the oldest are
 dropped (the freshest reading wins, as a robot wants) and counted, with one
 warning. The iteration ends cleanly when the robot stops (or the monitors are
-cancelled); breaking out of it unsubscribes once the generator is closed or
-collected.
+cancelled); breaking out of it unsubscribes once the iterator is closed or
+dropped, also one that never gave a value.
 """
 
 from __future__ import annotations
 
 import asyncio
 import math
+import weakref
 from collections import deque
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from collections.abc import AsyncIterator, Callable, Mapping
+    from collections.abc import Callable, Mapping
 
     from .._core._logging import ScopedLogger
     from ..state import StateStore
@@ -115,15 +116,42 @@ class Feed:
             waiter.set_result(None)
 
 
-async def iterate(feed: Feed, forget: Callable[[Feed], None]) -> AsyncIterator[Any]:
-    """Yield what ``feed`` receives until it closes; unsubscribe however the iteration ends."""
-    try:
-        while True:
-            while feed.values:
-                yield feed.values.popleft()
+class Watch:
+    """The async iterator ``robot.watch`` returns: the values of one `Feed`, in order.
+
+    It unsubscribes when the feed closes, when `aclose` is called, or when it
+    is dropped, whether or not it ever gave a value (an async generator's
+    ``finally`` would never run for one that never started).
+    """
+
+    __slots__ = ("__weakref__", "_feed", "_release")
+
+    def __init__(self, feed: Feed, forget: Callable[[Feed], None]) -> None:
+        self._feed = feed
+        self._release = weakref.finalize(self, _release, feed, forget)
+
+    def __aiter__(self) -> Watch:
+        return self
+
+    async def __anext__(self) -> Any:
+        feed = self._feed
+        while not feed.values:
             if feed.closed:
-                return
+                self._release()
+                raise StopAsyncIteration
             await feed.wait()
-    finally:
-        feed.close()
-        forget(feed)
+        return feed.values.popleft()
+
+    async def aclose(self) -> None:
+        """Stop watching now (what ``break`` then collection would do, at once)."""
+        self._release()
+
+    def __repr__(self) -> str:
+        feed = self._feed
+        state = "closed" if feed.closed else f"{len(feed.values)} buffered"
+        return f"<watch {feed.key!r} {state}>"
+
+
+def _release(feed: Feed, forget: Callable[[Feed], None]) -> None:
+    feed.close()
+    forget(feed)

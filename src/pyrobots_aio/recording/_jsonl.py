@@ -18,17 +18,24 @@ through the JSON encoder.
 
 The lines are strict JSON: a non-finite float (NaN, Infinity), which JSON
 cannot write, is recorded as null.
+
+A write that fails (a full disk, a file-size limit) stops the recording, not
+the robot: one warning says so, the file is cut back to its last whole line
+(a failed write can leave half a line behind), what comes after is dropped,
+and `JsonlRecorder.close` raises `RecordingError`. The file then reads as a
+recording without its end record (``Recording.complete`` is False).
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 import os
 from typing import IO, TYPE_CHECKING, Any
 
-from pyrobots_aio import EventKind
+from pyrobots_aio import EventKind, RecordingError
 from pyrobots_aio.robot.channels import finite as _finite
 from pyrobots_aio.robot.channels import jsonable as _jsonable
 
@@ -153,6 +160,7 @@ class JsonlRecorder(Recorder):
         self._lines: list[str] = []  # encoded, not yet written
         self._keys: dict[str, str] = {}  # each state key's JSON, with its colon
         self._timer: asyncio.TimerHandle | None = None
+        self._error: OSError | None = None
         # For each batched kind and action name: the data of its last event and its line end.
         self._ends: dict[EventKind, dict[str | None, tuple[Mapping[str, object], str]]] = {
             kind: {} for kind in _BATCHED
@@ -214,10 +222,11 @@ class JsonlRecorder(Recorder):
 
     def _first_pending(self, time: float) -> None:
         """Something waits to be written: check the state, plan a timed flush."""
-        if self._closed:
+        if self._closed or self._error is not None:
             self._batch.clear()
             self._lines.clear()
-            self._dropped()
+            if self._closed:
+                self._dropped()
             return
         if not self._opened:
             self._ensure_open(time)
@@ -238,14 +247,46 @@ class JsonlRecorder(Recorder):
             self._encode_batch()
         self._write()
 
+    @property
+    def error(self) -> OSError | None:
+        """The error that stopped the recording (a full disk), or None."""
+        return self._error
+
     def _write(self) -> None:
-        lines = self._lines
-        if not lines or self._file is None:
+        lines, file = self._lines, self._file
+        if not lines or file is None:
             return
         self._lines = []
+        try:
+            file.write("".join(lines))
+            file.flush()
+        except OSError as exc:
+            self._fail(exc)
+            return
         self._count += len(lines)
-        self._file.write("".join(lines))
-        self._file.flush()
+
+    def _fail(self, error: OSError) -> None:
+        """Stop recording after a failed write; cut the file back to its last whole line."""
+        self._error = error
+        file, self._file = self._file, None
+        self._batch.clear()
+        self._lines.clear()
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if file is not None:
+            with contextlib.suppress(OSError):  # its buffer cannot be written either
+                file.close()
+        try:
+            _cut_to_last_line(self.path)
+        except OSError as exc:
+            _log.debug("cannot cut %s back to its last whole line: %s", self.path, exc)
+        _log.warning(
+            "recording to %s stopped: %s; the file keeps what was written before, up to "
+            "its last whole line, and the robot runs on unrecorded",
+            self.path,
+            error,
+        )
 
     def _encode_batch(self) -> None:
         batch, self._batch = self._batch, []
@@ -274,22 +315,61 @@ class JsonlRecorder(Recorder):
         return f',"kind":"{event.kind}","name":{name},"data":{data}}}\n'
 
     def _open(self, header: Mapping[str, Any]) -> None:
-        self._file = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 (closed in _finish)
-        self._file.write(_encode(header) + "\n")
-        self._file.flush()
+        file = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 (closed in _finish)
+        try:
+            file.write(_encode(header) + "\n")
+            file.flush()
+        except BaseException:
+            with contextlib.suppress(OSError):
+                file.close()
+            raise
+        self._file = file
 
     def _finish(self, end: float | None, count: int) -> None:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        self.flush()
-        file, self._file = self._file, None
-        if file is not None:
-            file.write(_encode({"end": end, "events": self._count}) + "\n")
-            file.close()
+        try:
+            self.flush()
+        finally:  # even if interrupted: the end record, and the file closed
+            self._write_end(end)
+        if self._error is not None:
+            msg = (
+                f"recording to {self.path} failed: {self._error}; the file keeps the events "
+                "written before, up to its last whole line, without an end record"
+            )
+            raise RecordingError(msg)
         _log.debug("recorded %d events to %s", self._count, self.path)
 
+    def _write_end(self, end: float | None) -> None:
+        file, self._file = self._file, None
+        if file is None:
+            return
+        try:
+            file.write(_encode({"end": end, "events": self._count}) + "\n")
+            file.close()
+        except OSError as exc:
+            self._file = file
+            self._fail(exc)
+
     def __repr__(self) -> str:
-        state = "closed" if self._closed else "open"
+        state = "failed" if self._error else "closed" if self._closed else "open"
         events = self._count + len(self._lines) + len(self._batch)
         return f"<JsonlRecorder {self.path!r} {state}, {events} events>"
+
+
+def _cut_to_last_line(path: str) -> None:
+    """Truncate the file at ``path`` just after its last newline (a failed write's half line)."""
+    with open(path, "rb+") as file:
+        size = file.seek(0, os.SEEK_END)
+        end = size
+        while end > 0:
+            start = max(0, end - 4096)
+            file.seek(start)
+            newline = file.read(end - start).rfind(b"\n")
+            if newline >= 0:
+                end = start + newline + 1
+                break
+            end = start
+        if end < size:
+            file.truncate(end)

@@ -17,6 +17,7 @@ from .._core._blockwatch import DEFAULT_BLOCK_THRESHOLD, BlockWatch, check_block
 from .._core._instrument import Instrument, Instruments
 from .._core._logging import LogScope, check_level
 from .._core._loops import current_loop, no_asyncio_loop
+from .._core._signals import SignalStop
 from .._core._waiting import sleep_until
 from .._exceptions import ActionDefinitionError, ActionError, EventLoopError, PyRobotsError
 from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
@@ -62,6 +63,13 @@ class Robot(StateMethods, EmergencyStop):
             watchdog thread logs a WARNING naming the action that blocks it, with
             its ``file:line`` and stack, and records a ``loop.blocked`` event
             (real time, also in lockstep simulation); None: no watchdog.
+        handle_signals: While the robot runs in the main thread, take SIGINT and
+            SIGTERM over unless the program handles them already: the first
+            cancels the task that entered ``async with robot`` (an orderly
+            shutdown, cleanup bounded by ``cancel_grace``), a second cuts the
+            cleanup short, a third gets Python's default; leaving the block then
+            raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM).
+            False: leave the signals alone (see `pyrobots_aio.cli.stop_on_signals`).
 
     Example:
         >>> import asyncio
@@ -88,7 +96,10 @@ class Robot(StateMethods, EmergencyStop):
         backend: Backend | None = None,
         serve: int | None = None,
         block_threshold: float | None = DEFAULT_BLOCK_THRESHOLD,
+        handle_signals: bool = True,
     ) -> None:
+        self.handle_signals = handle_signals
+        self._signals: SignalStop | None = None
         self._block_threshold = check_block_threshold(block_threshold)
         self._blockwatch: BlockWatch | None = None
         self._attached: dict[str, Action[Any, Any, Any]] = {}
@@ -186,6 +197,8 @@ class Robot(StateMethods, EmergencyStop):
         self._executive.open(loop)
         self._state.bind(loop)
         self._watch_loop(loop)
+        if self.handle_signals:
+            self._signals = SignalStop().__enter__()
         try:
             await self._start()
         except BaseException:
@@ -194,6 +207,7 @@ class Robot(StateMethods, EmergencyStop):
             finally:
                 self._state.bind(None)
                 self._unwatch_loop()
+                self._release_signals(None)
             raise
         return self
 
@@ -204,14 +218,26 @@ class Robot(StateMethods, EmergencyStop):
         try:
             try:
                 try:
-                    await self._stop_monitoring()
+                    try:
+                        await self._stop_monitoring()
+                    finally:
+                        await self._executive.close(SHUTDOWN_REASON)
                 finally:
-                    await self._executive.close(SHUTDOWN_REASON)
+                    await self._stop()
             finally:
-                await self._stop()
-        finally:
-            self._state.bind(None)
-            self._unwatch_loop()
+                self._state.bind(None)
+                self._unwatch_loop()
+        except BaseException as exc:
+            self._release_signals(exc)
+            raise
+        error = exc_info[1]
+        self._release_signals(error if isinstance(error, BaseException) else None)
+
+    def _release_signals(self, exc: BaseException | None) -> None:
+        """Give the signals back; after one came, raise what Python's default would have."""
+        signals, self._signals = self._signals, None
+        if signals is not None:
+            signals.__exit__(type(exc) if exc is not None else None, exc, None)
 
     async def _start(self) -> None:
         """Start what the robot owns (the live view, the backend); subclasses extend this."""

@@ -82,13 +82,18 @@ class SimBackend:
         self._schedule(loop)
 
     async def stop(self) -> None:
-        """Stop the wheels and the ticking; fail whatever still waits on a controller."""
+        """Stop the wheels and the ticking; fail whatever waits on a controller, now or later.
+
+        An action still running once the robot has stopped (abandoned by the
+        watchdog, or cut loose by a second Ctrl-C) gets `LockstepError` from
+        `control` instead of waiting for a tick that never comes.
+        """
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
         self.world.stop()
         self._controllers.cancel()
-        self._robot = None
+        self._robot = self._loop = None
 
     async def control(self, controller: Callable[[], bool]) -> None:
         """Call ``controller()`` after every tick until it returns True.

@@ -59,7 +59,23 @@ def _import_mujoco() -> ModuleType:
             'install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
         ) from err
     module: ModuleType = mujoco
+    _route_warnings(module)
     return module
+
+
+def _route_warnings(mujoco: ModuleType) -> None:
+    """Send MuJoCo's warnings to the ``pyrobots_aio.sim`` logger, once per process.
+
+    MuJoCo's own handler prints them and appends them to ``MUJOCO_LOG.TXT`` in
+    the current directory. Its handler is process-wide: one a program set
+    itself is left in place.
+    """
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(_mujoco_warning)
+
+
+def _mujoco_warning(message: str) -> None:
+    _log.warning("MuJoCo: %s", message)
 
 
 def _load(mujoco: ModuleType, path: Path) -> Any:

@@ -1,0 +1,88 @@
+"""A running robot takes SIGINT and SIGTERM over (unless told not to, or they are taken)."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import threading
+
+import pytest
+
+from pyrobots_aio import Robot, action
+
+
+def _handlers() -> tuple[object, object]:
+    return signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+
+
+@pytest.mark.asyncio
+async def test_the_robot_takes_the_signals_while_it_runs_and_gives_them_back() -> None:
+    before = _handlers()
+    async with Robot():
+        assert _handlers() != before  # the loop's handlers (set_wakeup_fd) stand in
+    assert _handlers() == before
+
+
+@pytest.mark.asyncio
+async def test_handle_signals_false_leaves_them_alone() -> None:
+    before = _handlers()
+    async with Robot(handle_signals=False):
+        assert _handlers() == before
+    assert _handlers() == before
+
+
+@pytest.mark.asyncio
+async def test_a_signal_the_program_handles_is_left_alone() -> None:
+    def own(signum: int, frame: object) -> None:
+        raise AssertionError("not sent in this test")
+
+    previous = signal.signal(signal.SIGTERM, own)
+    try:
+        async with Robot():
+            assert signal.getsignal(signal.SIGTERM) is own
+        assert signal.getsignal(signal.SIGTERM) is own
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@pytest.mark.asyncio
+async def test_sigterm_stops_the_robot_in_order_and_raises_system_exit_143() -> None:
+    cleaned: list[str] = []
+
+    @action
+    async def hold(robot: Robot) -> None:
+        try:
+            await asyncio.sleep(60)
+        except asyncio.CancelledError:
+            await asyncio.sleep(0.01)  # cleanup that awaits
+            cleaned.append("hold")
+            raise
+
+    async def main() -> None:
+        async with Robot(actions=[hold]) as robot:
+            robot.hold()
+            await asyncio.sleep(0.01)
+            os.kill(os.getpid(), signal.SIGTERM)
+            await asyncio.sleep(60)
+
+    before = _handlers()
+    with pytest.raises(SystemExit) as ended:
+        await main()
+    assert ended.value.code == 143
+    assert cleaned == ["hold"]
+    assert _handlers() == before
+
+
+def test_a_robot_off_the_main_thread_leaves_the_signals_alone() -> None:
+    before = _handlers()
+    during: list[tuple[object, object]] = []
+
+    async def main() -> None:
+        async with Robot():
+            during.append(_handlers())
+
+    worker = threading.Thread(target=asyncio.run, args=(main(),))
+    worker.start()
+    worker.join()
+    assert during == [before]
