@@ -141,33 +141,32 @@ def make_app() -> web.Application:
     return app
 
 
-async def try_it() -> list[Any]:
+async def try_it() -> dict[str, Any]:
     """Serve the app on a free loopback port, call each endpoint as a client would, stop."""
-    runner = web.AppRunner(make_app())
+    runner = web.AppRunner(make_app(), access_log=None)  # the demo logs its own calls
     await runner.setup()
     site = web.TCPSite(runner, "127.0.0.1", 0)
     await site.start()
     host, port = runner.addresses[0][:2]
-    answers: list[Any] = []
+    seen: dict[str, Any] = {}
     async with aiohttp.ClientSession(f"http://{host}:{port}") as client:
 
-        async def call(method: str, path: str, **params: Any) -> Any:
+        async def call(what: str, method: str, path: str, **params: Any) -> Any:
             async with client.request(method, path, params=params) as response:
-                answers.append(await response.json())
-                log.info("%s %s %s -> %d %s", method, path, params, response.status, answers[-1])
-            return answers[-1]
+                seen[what] = await response.json()
+                log.info("%s %s %s -> %d %s", method, path, params, response.status, seen[what])
+            return seen[what]
 
-        patrolling = await call("POST", "/patrol", laps=1000)
-        await call("GET", f"/actions/{patrolling['id']}", wait=0.2)  # gives up: still running
+        walk = await call("started", "POST", "/patrol", laps=1000)
+        await call("gave up", "GET", f"/actions/{walk['id']}", wait=0.2)  # it goes on
         async with client.ws_connect("/battery") as socket:
-            levels = [await socket.receive_json() for _ in range(3)]
-        log.info("GET /battery (websocket) -> %s", levels)
-        answers.append(len(levels))
-        await call("DELETE", f"/actions/{patrolling['id']}")
-        short = await call("POST", "/patrol", laps=2)
-        await call("GET", f"/actions/{short['id']}", wait=30)
+            seen["battery"] = [await socket.receive_json() for _ in range(3)]
+        log.info("GET /battery (websocket) -> %s", seen["battery"])
+        await call("cancelled", "DELETE", f"/actions/{walk['id']}")
+        short = await call("short", "POST", "/patrol", laps=2)
+        await call("short after", "GET", f"/actions/{short['id']}", wait=30)
     await runner.cleanup()
-    return answers
+    return seen
 
 
 if __name__ == "__main__":

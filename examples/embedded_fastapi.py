@@ -145,7 +145,7 @@ async def run_dock(
         async with asyncio.timeout(deadline):
             await handle  # owning: when the deadline cancels this wait, it cancels the action
     except TimeoutError:
-        detail = f"dock#{handle.id} not done within {deadline} s; cancelled"
+        detail = {"error": f"not done within {deadline} s", **describe(handle)}
         raise HTTPException(504, detail) from None
     except ActionInterrupted as stop:
         raise HTTPException(409, f"dock#{handle.id} interrupted: {stop.reason}") from None
@@ -195,41 +195,41 @@ async def simulate(distance: float = 0.5) -> dict[str, Any]:
     return report
 
 
-async def try_it() -> list[Any]:
+async def try_it() -> dict[str, Any]:
     """Serve the app on a free loopback port, call each endpoint as a client would, stop."""
     listener = socket.create_server(("127.0.0.1", 0))
     server = uvicorn.Server(uvicorn.Config(app, log_config=None, log_level="warning"))
     serving = asyncio.create_task(server.serve(sockets=[listener]))
     url = "http://127.0.0.1:{}".format(*listener.getsockname()[1:])
-    answers: list[Any] = []
+    seen: dict[str, Any] = {}
     async with httpx.AsyncClient(base_url=url, timeout=60) as client:
 
-        async def call(method: str, path: str, **params: Any) -> Any:
+        async def call(what: str, method: str, path: str, **params: Any) -> Any:
             response = await client.request(method, path, params=params)
-            log.info("%s %s %s -> %d %s", method, path, params, response.status_code, response.text)
-            answers.append(response.json())
-            return answers[-1]
+            seen[what] = response.json()
+            log.info("%s %s %s -> %d %s", method, path, params, response.status_code, seen[what])
+            return seen[what]
 
-        patrolling = await call("POST", "/patrol", laps=1000)
-        await call("GET", f"/actions/{patrolling['id']}", wait=0.2)  # gives up: still running
+        walk = await call("started", "POST", "/patrol", laps=1000)
+        await call("gave up", "GET", f"/actions/{walk['id']}", wait=0.2)  # it goes on
         async with client.stream("GET", "/battery", params={"count": 2}) as stream:
-            levels = [float(line[6:]) async for line in stream.aiter_lines() if line]
-        log.info("GET /battery -> %s", levels)
-        answers.append(len(levels))
-        await call("POST", "/dock", seconds=60, deadline=0.2)  # the deadline cancels it
-        await call("GET", f"/actions/{patrolling['id'] + 1}", wait=30)
-        await call("POST", "/simulate", distance=0.5)
-        await call("POST", "/stop")
-        await call("GET", f"/actions/{patrolling['id']}")
-        short = await call("POST", "/patrol", laps=2)
-        await call("GET", f"/actions/{short['id']}", wait=30)
+            seen["battery"] = [float(line[6:]) async for line in stream.aiter_lines() if line]
+        log.info("GET /battery?count=2 -> %s", seen["battery"])
+        late = await call("late", "POST", "/dock", seconds=60, deadline=0.2)  # cancelled
+        await call("late after", "GET", f"/actions/{late['detail']['id']}", wait=30)
+        await call("simulated", "POST", "/simulate", distance=0.5)
+        await call("stop", "POST", "/stop")
+        await call("stopped", "GET", f"/actions/{walk['id']}")
+        short = await call("short", "POST", "/patrol", laps=2)
+        await call("short after", "GET", f"/actions/{short['id']}", wait=30)
     server.should_exit = True
     await serving
-    return answers
+    return seen
 
 
 if __name__ == "__main__":
     install_console_handler(logging.INFO)
+    logging.getLogger("httpx").setLevel(logging.WARNING)  # the demo logs its own calls
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--port", type=int, help="serve on 127.0.0.1:PORT until Ctrl-C")
     port = parser.parse_args().port

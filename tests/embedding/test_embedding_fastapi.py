@@ -73,7 +73,14 @@ async def test_starts_polls_cancels_streams_and_stops_cleanly_on_ctrl_c(
         # an owning wait: the request's deadline cancels the action
         late = await client.post("/dock", params={"seconds": 3600, "deadline": 0.2})
         assert late.status_code == 504
-        assert late.json() == {"detail": "dock#2 not done within 0.2 s; cancelled"}
+        assert late.json()["detail"] == {
+            "error": "not done within 0.2 s",
+            "id": 2,
+            "name": "dock",
+            "state": "cancelling",
+            "outcome": "not_done",
+            "cancel_reason": "the task awaiting it was cancelled",
+        }
         dock = await call(client, "GET", "/actions/2", wait=TIMEOUT)
         assert (dock["outcome"], dock["cancel_reason"]) == (
             "cancelled",
