@@ -20,13 +20,12 @@ battery stream without ``count`` keeps Ctrl-C waiting until its client leaves
 (or until ``--timeout-graceful-shutdown`` cuts it).
 
 Run: ``python examples/embedded_fastapi.py`` serves the app on a free loopback
-port, calls each endpoint as a client would, and stops;
-``python examples/embedded_fastapi.py --port 8000`` serves until Ctrl-C.
+port, calls each endpoint as a client would, and stops. Serve it until Ctrl-C
+as a deployment does: ``uvicorn --app-dir examples embedded_fastapi:app``.
 """
 
 from __future__ import annotations
 
-import argparse
 import asyncio
 import contextlib
 import logging
@@ -230,10 +229,4 @@ async def try_it() -> dict[str, Any]:
 if __name__ == "__main__":
     install_console_handler(logging.INFO)
     logging.getLogger("httpx").setLevel(logging.WARNING)  # the demo logs its own calls
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--port", type=int, help="serve on 127.0.0.1:PORT until Ctrl-C")
-    port = parser.parse_args().port
-    if port is None:
-        asyncio.run(try_it())
-    else:
-        uvicorn.run(app, host="127.0.0.1", port=port, log_config=None)
+    asyncio.run(try_it())

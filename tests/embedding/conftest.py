@@ -1,11 +1,13 @@
 """Real servers for the embedding tests: an example app in a subprocess on 127.0.0.1.
 
-The server runs as a user runs it (``python examples/NAME.py --port N``), its
-output goes to a file, and the test stops it as a user does, with SIGINT.
+The server runs as a user runs it (``uvicorn --app-dir examples ...``, ``python
+examples/NAME.py --port N``), its output goes to a file, and the test stops it
+as a user does, with SIGINT.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
@@ -28,6 +30,12 @@ ALARMS = re.compile(
     r"Traceback|Task was destroyed but it is pending|never retrieved|"
     r"\b(?:ERROR|CRITICAL|WARNING)\b"
 )
+LOG_CONFIG = {  # for uvicorn --log-config: every logger, the app's too, through one handler
+    "version": 1,
+    "disable_existing_loggers": False,
+    "handlers": {"console": {"class": "pyrobots_aio.cli.ConsoleHandler", "colour": False}},
+    "root": {"level": "INFO", "handlers": ["console"]},
+}
 
 
 def free_port() -> int:
@@ -38,15 +46,15 @@ def free_port() -> int:
 
 
 class Server:
-    """One example app serving in a subprocess; its combined output goes to ``log``."""
+    """A server in a subprocess (``python ARGS``, ``{port}`` replaced); output to ``log``."""
 
-    def __init__(self, name: str, log: Path) -> None:
+    def __init__(self, args: list[str], log: Path) -> None:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.log = log
         with log.open("wb") as out:
             self.process = subprocess.Popen(
-                [sys.executable, str(EXAMPLES / f"{name}.py"), "--port", str(self.port)],
+                [sys.executable, *(arg.format(port=self.port) for arg in args)],
                 stdout=out,
                 stderr=subprocess.STDOUT,
                 env={**os.environ, "NO_COLOR": "1", "PYTHONUNBUFFERED": "1"},
@@ -92,12 +100,12 @@ class Server:
 
 
 @pytest.fixture
-def serve(tmp_path: Path) -> Iterator[Callable[[str], Server]]:
-    """Start ``examples/NAME.py --port N`` and wait until it listens; kill it if a test failed."""
+def serve(tmp_path: Path) -> Iterator[Callable[[list[str]], Server]]:
+    """Start a server (``python ARGS``) and wait until it listens; kill it if a test failed."""
     started: list[Server] = []
 
-    def start(name: str) -> Server:
-        server = Server(name, tmp_path / f"{name}.log")
+    def start(args: list[str]) -> Server:
+        server = Server(args, tmp_path / f"server-{len(started)}.log")
         started.append(server)
         server.wait_until_listening()
         return server
@@ -105,3 +113,20 @@ def serve(tmp_path: Path) -> Iterator[Callable[[str], Server]]:
     yield start
     for server in started:
         server.kill()
+
+
+@pytest.fixture
+def uvicorn_command(tmp_path: Path) -> list[str]:
+    """The FastAPI example under uvicorn's own command line, as it is deployed."""
+    config = tmp_path / "logging.json"
+    config.write_text(json.dumps(LOG_CONFIG))
+    return [
+        *("-m", "uvicorn", "--app-dir", str(EXAMPLES), "--log-config", str(config)),
+        *("--host", "127.0.0.1", "--port", "{port}", "embedded_fastapi:app"),
+    ]
+
+
+@pytest.fixture
+def aiohttp_command() -> list[str]:
+    """The aiohttp example under ``web.run_app``, as its ``--port`` option runs it."""
+    return [str(EXAMPLES / "embedded_aiohttp.py"), "--port", "{port}"]

@@ -38,9 +38,9 @@ def one_percent_steps(values: list[float]) -> bool:
 
 @pytest.mark.asyncio
 async def test_starts_polls_cancels_streams_and_stops_cleanly_on_ctrl_c(
-    serve: Callable[[str], Server],
+    serve: Callable[[list[str]], Server], uvicorn_command: list[str]
 ) -> None:
-    server = serve("embedded_fastapi")
+    server = serve(uvicorn_command)
     async with httpx.AsyncClient(base_url=server.url, timeout=TIMEOUT) as client:
         # starting an action answers its id at once
         first = await call(client, "POST", "/patrol", laps=1000)
@@ -129,9 +129,9 @@ async def test_starts_polls_cancels_streams_and_stops_cleanly_on_ctrl_c(
 
 @pytest.mark.asyncio
 async def test_ctrl_c_waits_for_an_open_stream_and_the_robot_runs_until_it_closes(
-    serve: Callable[[str], Server],
+    serve: Callable[[list[str]], Server], uvicorn_command: list[str]
 ) -> None:
-    server = serve("embedded_fastapi")
+    server = serve(uvicorn_command)
     waiting = "Waiting for connections to close"
     async with httpx.AsyncClient(base_url=server.url, timeout=TIMEOUT) as client:
         await call(client, "POST", "/patrol", laps=1000)
