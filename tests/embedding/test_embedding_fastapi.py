@@ -86,7 +86,7 @@ async def test_starts_polls_cancels_streams_and_stops_cleanly_on_ctrl_c(
             "cancelled",
             "the task awaiting it was cancelled",
         )
-        docked = await call(client, "POST", "/dock", seconds=0.05)
+        docked = await call(client, "POST", "/dock", seconds=0.05, deadline=TIMEOUT)
         assert docked == {
             "id": 3,
             "name": "dock",
