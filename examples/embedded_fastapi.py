@@ -7,8 +7,8 @@ outlives it (the lifespan logs the tasks left once the robot is out: none).
     POST   /patrol?laps=N          start an action; answer its id at once (202)
     GET    /actions/{id}?wait=S    long-poll: wait up to S s; giving up leaves it running
     DELETE /actions/{id}           cancel an action; answer once its cleanup is over
-    POST   /dock?deadline=S        run an action inside the request, owning it: past
-                                   the deadline the request gives up and cancels it (504)
+    POST   /dock?seconds=T&deadline=S  run an action inside the request, owning it:
+                                   past the deadline the request gives up and cancels it (504)
     POST   /stop                   a plain ``def`` endpoint (FastAPI runs it in a worker
                                    thread): it hands its work to the robot's loop
     GET    /battery?count=N        Server-Sent Events: the level, then each change
@@ -49,10 +49,10 @@ log = logging.getLogger("embedded_fastapi")
 
 
 @action
-async def patrol(robot: Robot, laps: int, lap_time: float = 0.1) -> int:
-    """Drive ``laps`` laps; each costs one percent of the battery."""
+async def patrol(robot: Robot, laps: int) -> int:
+    """Drive ``laps`` laps of 0.1 s; each costs one percent of the battery."""
     for _ in range(laps):
-        await robot.sleep(lap_time)
+        await robot.sleep(0.1)
         robot.state.battery = round(robot.state.battery - 0.01, 2)
     return laps
 
@@ -165,16 +165,19 @@ def stop(request: Request) -> dict[str, int]:
 
 
 @app.get("/battery")
-async def battery(robot: RobotDep, count: int | None = None) -> StreamingResponse:
+async def battery(
+    robot: RobotDep, count: Annotated[int | None, Query(ge=1)] = None
+) -> StreamingResponse:
     async def events() -> AsyncIterator[str]:
-        changes = robot.watch("battery")  # subscribed before the level is read: none missed
-        yield f"data: {robot.state.battery}\n\n"
-        seen = 0
-        async for level in changes:  # ends when the robot stops
-            if seen == count:
-                break
-            yield f"data: {level}\n\n"
-            seen += 1
+        # subscribed before the level is read: no change is missed
+        async with contextlib.aclosing(robot.watch("battery")) as changes:
+            yield f"data: {robot.state.battery}\n\n"
+            sent = 0
+            async for level in changes:  # ends when the robot stops
+                yield f"data: {level}\n\n"
+                sent += 1
+                if sent == count:
+                    break
 
     return StreamingResponse(events(), media_type="text/event-stream")
 
