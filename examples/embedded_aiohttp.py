@@ -5,7 +5,7 @@ request and leaves it after the last one (aiohttp runs it in the task that
 Ctrl-C cancels: the robot still winds down every action, bounded by
 ``cancel_grace``); then it logs the tasks left: none.
 
-    POST   /patrol?laps=N          start an action; answer its id at once (202)
+    POST   /vacuum?rooms=N         start an action; answer its id at once (202)
     GET    /actions/{id}?wait=S    long-poll: wait up to S s; giving up leaves it running
     DELETE /actions/{id}           cancel an action; answer once its cleanup is over
     GET    /battery                a websocket: the level, then each change; the server
@@ -42,18 +42,19 @@ SOCKETS = web.AppKey("sockets", weakref.WeakSet[web.WebSocketResponse])
 
 
 @action
-async def patrol(robot: Robot, laps: int) -> int:
-    """Drive ``laps`` laps of 0.1 s; each costs one percent of the battery."""
-    for _ in range(laps):
+async def vacuum(robot: Robot, rooms: int) -> int:
+    """Vacuum ``rooms`` rooms, 0.1 s each; each room costs one percent of the battery."""
+    for room in range(rooms):
+        robot.state.room = room
         await robot.sleep(0.1)
         robot.state.battery = round(robot.state.battery - 0.01, 2)
-    return laps
+    return rooms
 
 
 async def robot_context(app: web.Application) -> AsyncIterator[None]:
     before = asyncio.all_tasks()
     async with Robot() as robot:
-        robot.state.battery = 1.0
+        robot.state.update(battery=1.0, room=None)
         app[ROBOT] = robot
         app[ACTIONS] = {}
         log.info("robot started")
@@ -78,8 +79,8 @@ def find(request: web.Request) -> ActionHandle[Any]:
     return handle
 
 
-async def start_patrol(request: web.Request) -> web.Response:
-    handle = patrol(request.app[ROBOT], int(request.query.get("laps", 3)))
+async def start_vacuum(request: web.Request) -> web.Response:
+    handle = vacuum(request.app[ROBOT], int(request.query.get("rooms", 3)))
     request.app[ACTIONS][handle.id] = handle
     return answer(handle, status=202)
 
@@ -132,7 +133,7 @@ def make_app() -> web.Application:
     app.on_shutdown.append(close_sockets)
     app.add_routes(
         [
-            web.post("/patrol", start_patrol),
+            web.post("/vacuum", start_vacuum),
             web.get("/actions/{ident}", poll_action),
             web.delete("/actions/{ident}", cancel_action),
             web.get("/battery", battery),
@@ -157,13 +158,13 @@ async def try_it() -> dict[str, Any]:
                 log.info("%s %s %s -> %d %s", method, path, params, response.status, seen[what])
             return seen[what]
 
-        walk = await call("started", "POST", "/patrol", laps=1000)
+        walk = await call("started", "POST", "/vacuum", rooms=1000)
         await call("gave up", "GET", f"/actions/{walk['id']}", wait=0.2)  # it goes on
         async with client.ws_connect("/battery") as socket:
             seen["battery"] = [await socket.receive_json() for _ in range(3)]
         log.info("GET /battery (websocket) -> %s", seen["battery"])
         await call("cancelled", "DELETE", f"/actions/{walk['id']}")
-        short = await call("short", "POST", "/patrol", laps=2)
+        short = await call("short", "POST", "/vacuum", rooms=2)
         await call("short after", "GET", f"/actions/{short['id']}", wait=30)
     await runner.cleanup()
     return seen

@@ -29,8 +29,8 @@ async def test_serves_and_on_ctrl_c_closes_its_websockets_then_stops_the_robot(
 ) -> None:
     server = serve(aiohttp_command)
     async with aiohttp.ClientSession(server.url, timeout=TIMEOUT) as client:
-        first = await call(client, "POST", "/patrol", laps=1000)
-        assert first == {"id": 1, "name": "patrol", "state": "pending", "outcome": "not_done"}
+        first = await call(client, "POST", "/vacuum", rooms=1000)
+        assert first == {"id": 1, "name": "vacuum", "state": "pending", "outcome": "not_done"}
 
         # a long-poll that gives up does not own the action: it goes on running
         polled = await call(client, "GET", "/actions/1", wait=0.2)
@@ -44,21 +44,21 @@ async def test_serves_and_on_ctrl_c_closes_its_websockets_then_stops_the_robot(
         # a long-poll in flight sees the cancellation; DELETE answers once it is done
         waiting = asyncio.create_task(call(client, "GET", "/actions/1", wait=60))
         cancelled = await call(client, "DELETE", "/actions/1")
-        assert cancelled == {"id": 1, "name": "patrol", "state": "done", "outcome": "cancelled"}
+        assert cancelled == {"id": 1, "name": "vacuum", "state": "done", "outcome": "cancelled"}
         assert await waiting == cancelled
 
         # many requests at once, each action awaited by a long-poll of its own
         started = await asyncio.gather(
-            *(call(client, "POST", "/patrol", laps=2) for _ in range(40))
+            *(call(client, "POST", "/vacuum", rooms=2) for _ in range(40))
         )
         finished = await asyncio.gather(
             *(call(client, "GET", f"/actions/{a['id']}", wait=60) for a in started)
         )
         assert {(f["outcome"], f["result"]) for f in finished} == {("succeeded", 2)}
 
-        # at Ctrl-C, a patrol still runs and a websocket is open: the server closes the
-        # socket (on_shutdown), then the robot cancels the patrol
-        await call(client, "POST", "/patrol", laps=1000)
+        # at Ctrl-C, a vacuum still runs and a websocket is open: the server closes the
+        # socket (on_shutdown), then the robot cancels the vacuum
+        await call(client, "POST", "/vacuum", rooms=1000)
         async with client.ws_connect("/battery") as socket:
             assert isinstance(await socket.receive_json(), float)
             server.interrupt()

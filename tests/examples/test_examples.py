@@ -124,12 +124,12 @@ async def test_embedded_fastapi() -> None:
 @pytest.mark.asyncio
 async def test_embedded_aiohttp() -> None:
     seen = await load_example("embedded_aiohttp").try_it()
-    patrol = {"id": 1, "name": "patrol"}
-    assert seen["gave up"] == {**patrol, "state": "running", "outcome": "not_done"}
+    vacuum = {"id": 1, "name": "vacuum"}
+    assert seen["gave up"] == {**vacuum, "state": "running", "outcome": "not_done"}
     levels = seen["battery"]
     assert levels == [levels[0], round(levels[0] - 0.01, 2), round(levels[0] - 0.02, 2)]
-    assert seen["cancelled"] == {**patrol, "state": "done", "outcome": "cancelled"}
-    short = {"id": 2, "name": "patrol"}
+    assert seen["cancelled"] == {**vacuum, "state": "done", "outcome": "cancelled"}
+    short = {"id": 2, "name": "vacuum"}
     assert seen["short after"] == {**short, "state": "done", "outcome": "succeeded", "result": 2}
 
 
