@@ -98,6 +98,42 @@ async def test_embedded() -> None:
 
 
 @pytest.mark.asyncio
+async def test_embedded_fastapi() -> None:
+    seen = await load_example("embedded_fastapi").try_it()
+    patrol = {"id": 1, "name": "patrol"}
+    assert seen["started"] == {**patrol, "state": "pending", "outcome": "not_done"}
+    assert seen["gave up"] == {**patrol, "state": "running", "outcome": "not_done"}
+    levels = seen["battery"]  # the level, then two changes of one percent
+    assert levels == [levels[0], round(levels[0] - 0.01, 2), round(levels[0] - 0.02, 2)]
+    owned = {"id": 2, "name": "dock", "cancel_reason": "the task awaiting it was cancelled"}
+    late = {"error": "not done within 0.2 s", **owned, "state": "cancelling", "outcome": "not_done"}
+    assert seen["late"] == {"detail": late}  # a 504: the deadline cancelled the owned action
+    assert seen["late after"] == {**owned, "state": "done", "outcome": "cancelled"}
+    assert seen["simulated"]["outcome"] == "succeeded"
+    assert seen["stop"] == {"stopped": 1}
+    assert seen["stopped"] == {
+        **patrol,
+        "state": "done",
+        "outcome": "cancelled",
+        "cancel_reason": "stop button",
+    }
+    short = {"id": 3, "name": "patrol"}
+    assert seen["short after"] == {**short, "state": "done", "outcome": "succeeded", "result": 2}
+
+
+@pytest.mark.asyncio
+async def test_embedded_aiohttp() -> None:
+    seen = await load_example("embedded_aiohttp").try_it()
+    vacuum = {"id": 1, "name": "vacuum"}
+    assert seen["gave up"] == {**vacuum, "state": "running", "outcome": "not_done"}
+    levels = seen["battery"]
+    assert levels == [levels[0], round(levels[0] - 0.01, 2), round(levels[0] - 0.02, 2)]
+    assert seen["cancelled"] == {**vacuum, "state": "done", "outcome": "cancelled"}
+    short = {"id": 2, "name": "vacuum"}
+    assert seen["short after"] == {**short, "state": "done", "outcome": "succeeded", "result": 2}
+
+
+@pytest.mark.asyncio
 @pytest.mark.virtual_time
 async def test_master_controller() -> None:
     log = EventLog()
