@@ -5,12 +5,14 @@ from __future__ import annotations
 import asyncio
 import logging
 import threading
+import time
 from typing import TYPE_CHECKING
 
 import pytest
 
 from pyrobots_aio import EventKind, ExecEvent
-from pyrobots_aio._core._blockwatch import Blocker, BlockWatch
+from pyrobots_aio._core import _blockwatch
+from pyrobots_aio._core._blockwatch import Blocker, BlockWatch, runqueue_wait
 from pyrobots_aio._core._instrument import Instruments
 from pyrobots_aio._core._logging import LogScope
 
@@ -111,3 +113,39 @@ async def test_a_failure_of_the_watchdog_itself_is_logged_not_silent(warned: War
     assert record.getMessage() == "the loop watchdog failed; the loop is no longer watched"
     assert record.exc_info is not None
     assert isinstance(record.exc_info[1], LookupError)
+
+
+def test_runqueue_wait_reads_this_threads_wait_for_a_cpu() -> None:
+    me = threading.get_native_id()
+    first = runqueue_wait(me)
+    assert first is not None  # Linux: the scheduler's statistics
+    assert first >= 0.0
+    sum(range(2_000_000))  # run a while
+    second = runqueue_wait(me)
+    assert second is not None
+    assert second >= first
+    assert runqueue_wait(2**31 - 1) is None  # no such thread
+
+
+@pytest.mark.parametrize("queued", [True, False], ids=["waiting-for-a-cpu", "blocking"])
+@pytest.mark.asyncio
+async def test_time_the_loop_waits_for_a_cpu_is_not_a_block(
+    monkeypatch: pytest.MonkeyPatch, warned: Warned, queued: bool
+) -> None:
+    # The kernel's counter stands in for a loaded machine: while the loop thread
+    # "waits for a CPU", its wait grows with the wall clock, and no block is reported.
+    origin = time.monotonic()
+
+    def waited(native_id: int) -> float:
+        return time.monotonic() - origin if queued else 0.0
+
+    monkeypatch.setattr(_blockwatch, "runqueue_wait", waited)
+    watch, kept = _watch(0.05)
+    watch.start()
+    try:
+        time.sleep(0.3)  # noqa: ASYNC251  # the loop thread stalls; the counter says why
+        await asyncio.sleep(0.01)
+    finally:
+        watch.stop()
+    assert (watch.blocks, len(kept.events)) == ((0, 0) if queued else (1, 1))
+    assert warned.warned.is_set() is not queued

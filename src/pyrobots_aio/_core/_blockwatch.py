@@ -18,6 +18,10 @@ How it watches, without costing the loop:
 - When the loop is inside a callback, the thread probes it: it posts a
   callback (``call_soon_threadsafe``) that stamps the time, and waits up to
   ``threshold`` for it. Answered: the loop turns.
+- Time the loop thread spent waiting for a CPU (other processes keeping both
+  cores busy: Linux's ``/proc/self/task/<tid>/schedstat``) does not count: the
+  wait goes on by that much, so that a loaded machine is not reported as
+  blocking code.
 - Unanswered: the loop has not turned for ``threshold``. The thread reads the
   loop thread's stack there and then, logs the WARNING, and waits for the same
   probe without probing again: one report per block, however long it lasts.
@@ -61,6 +65,19 @@ MIN_BLOCK_THRESHOLD = 0.01
 """The smallest threshold: the thread looks twice per threshold, so less would cost CPU."""
 JOIN_BOUND = 5.0
 """Seconds `BlockWatch.stop` waits for the thread (only a stuck log handler could need it)."""
+
+def runqueue_wait(native_id: int) -> float | None:
+    """Seconds thread ``native_id`` of this process has waited for a CPU so far (None: unknown).
+
+    Linux's scheduler statistics: the second field of the thread's
+    ``schedstat`` (nanoseconds spent runnable but not running).
+    """
+    try:
+        with open(f"/proc/self/task/{native_id}/schedstat", encoding="ascii") as stats:
+            return int(stats.read().split()[1]) / 1e9
+    except (OSError, IndexError, ValueError):
+        return None
+
 
 _RUN_ONCE = base_events.BaseEventLoop._run_once.__code__  # type: ignore[attr-defined]  # one iteration
 _CALLBACK = events.Handle._run.__code__  # one callback of an iteration (timers' too)
@@ -194,6 +211,7 @@ class BlockWatch:
         self._instruments = instruments
         self._blocker = blocker
         self._loop_thread = threading.get_ident()
+        self._loop_native_id = threading.get_native_id()
         self._cond = threading.Condition()
         self._stopping = False
         # Reported blocks whose event is not out yet: the loop emits each once it turns (a
@@ -269,7 +287,7 @@ class BlockWatch:
                     self._loop.call_soon_threadsafe(self._answer, probe)
                 except RuntimeError:  # the loop is closed: nothing left to watch
                     return
-                if not self._wait_for(probe, self.threshold):
+                if not self._wait_while_scheduled(probe):
                     self._report(probe)
                     self._wait_for(probe, None)
         except Exception:  # a bug here must not pass silently
@@ -286,6 +304,22 @@ class BlockWatch:
             return self._cond.wait_for(
                 lambda: probe.answered is not None or self._stopping, timeout
             )
+
+    def _wait_while_scheduled(self, probe: _Probe) -> bool:
+        """Wait for the loop's answer for ``threshold``, not counting its waits for a CPU.
+
+        False: no answer though the loop thread could run (or slept) for
+        ``threshold`` since the probe was posted.
+        """
+        start = runqueue_wait(self._loop_native_id)
+        budget = self.threshold
+        while not self._wait_for(probe, budget):
+            now = runqueue_wait(self._loop_native_id)
+            queued = now - start if now is not None and start is not None else 0.0
+            budget = probe.posted + self.threshold + queued - time.monotonic()
+            if budget <= 0:
+                return False
+        return True
 
     def _turning(self) -> bool:
         """Whether the loop thread is outside any callback now (waiting, or between them)."""
