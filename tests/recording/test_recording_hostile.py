@@ -111,6 +111,7 @@ def test_hostile_strings_in_every_field_stay_text(tmp_path: Path) -> None:
             assert not re.search("alert|script", style), (tag, style)
         assert "<script>alert" not in page
         assert HOSTILE not in page  # only ever escaped
+        assert page.count('<rect class="paused"') == 2  # the pause reasons are on the page
 
 
 def test_control_characters_from_a_recording_are_not_printed_raw(tmp_path: Path) -> None:

@@ -59,7 +59,7 @@ rect:hover { stroke: #000; stroke-width: 1; } text.in { fill: #fff; pointer-even
 text.in.dark { fill: #37474f; } text.out { fill: #455a64; pointer-events: none; }
 .succeeded { fill: #43a047; } .failed { fill: #e53935; } .cancelled { fill: #fb8c00; }
 .skipped { fill: #9e9e9e; } .not_done { fill: #1e88e5; }
-rect.paused { fill: url(#paused-hatch); }
+rect.paused { fill: url(#paused-hatch); } pattern rect { stroke: none; }
 .wait { fill: #cfd8dc; } .state-on { fill: #5e35b1; } .cancel-mark { stroke: #000; }
 .preempt { fill: #000; } .firing { stroke: #6a1b9a; stroke-width: 2; }
 .rate-actions { fill: #1e88e5; } .rate-events { fill: #8e24aa; }
@@ -141,7 +141,7 @@ _SCRIPT = """
 """
 """The page's only script: static text, it reads the ``data-`` attributes the page sets."""
 _OUTCOMES = frozenset(_svg.OUTCOME_COLOURS)
-PAUSED_PALE, PAUSED_INK = "#eceff1", "#546e7a"
+PAUSED_PALE, PAUSED_INK = "#eceff1", "#a7b5bc"
 """The paused hatch: ink stripes on a pale ground, unlike any outcome's plain colour."""
 _HATCH = (
     '<defs><pattern id="paused-hatch" width="6" height="6" patternUnits="userSpaceOnUse" '
@@ -249,21 +249,28 @@ class _Canvas:
         fill: str = "",
         room: float = 0.0,
         least: float = 1.0,
+        paused: Sequence[tuple[float, float, str]] = (),
     ) -> None:
         """A bar on the current row, with a tooltip and ``text`` inside if it fits.
 
         Otherwise ``text`` goes right of the bar when the next ``room`` pixels
         are free (and is left to the tooltip when they are not). ``least`` is
         the narrowest bar drawn, in pixels, so that short pulses show.
+        ``paused`` spells (begin, end, tooltip) are hatched over the bar, under
+        its text (dark when the bar begins paused).
         """
         x, w = self.scale.x(begin), max(least, self.scale.width(begin, end))
         self.parts.append(_svg.rect(cls, (x, self.y, w, BAR_H), title, fill))
+        for start, stop, about in paused:
+            box = (self.scale.x(start), self.y, self.scale.width(start, stop), BAR_H)
+            self.parts.append(_svg.rect("paused", box, about))
         if not text:
             return
         y = self.y + BAR_H - 3
         needed = len(text) * _svg.CHAR_W + 4
         if w >= needed:
-            ink = "in dark" if cls == "wait" else "in"
+            dark = cls == "wait" or any(start <= begin < stop for start, stop, _ in paused)
+            ink = "in dark" if dark else "in"
             self.parts.append(f'<text class="{ink}" x="{x + 2:.1f}" y="{y:.1f}">{esc(text)}</text>')
         elif room - w >= needed + 2 and x + w + needed < WIDTH:
             self.parts.append(
@@ -337,13 +344,15 @@ def _pause_title(canvas: _Canvas, span: Span, spell: Pause) -> str:
     return "\n".join(lines)
 
 
-def _draw_pauses(canvas: _Canvas, span: Span) -> None:
-    """Hatch each spell ``span`` spent paused over its bar (drawn just before)."""
+def _paused(canvas: _Canvas, span: Span) -> list[tuple[float, float, str]]:
+    """The spells ``span`` spent paused, within its bar, with their tooltips."""
     first, last = span.begin, canvas.end_of(span)
+    spells = []
     for spell in span.pauses:
         begin, end = max(first, spell.start), min(last, canvas.end_of_pause(spell))
         if end >= begin:
-            canvas.bar("paused", begin, end, _pause_title(canvas, span, spell))
+            spells.append((begin, end, _pause_title(canvas, span, spell)))
+    return spells
 
 
 def _begin(span: Span) -> float:
@@ -374,8 +383,8 @@ def _draw_actions(canvas: _Canvas) -> None:
                 _action_title(canvas, span),
                 text=f"{span.name}#{span.id}",
                 room=room,
+                paused=_paused(canvas, span),
             )
-            _draw_pauses(canvas, span)
             if span.cancelled_at is not None:
                 canvas.tick("cancel-mark", span.cancelled_at, f"cancel requested: {span.reason}")
         canvas.y += ROW_H
