@@ -35,6 +35,7 @@ from pyrobots_aio.recording._analysis import STILL_PAUSED, analyse
 from pyrobots_aio.recording._svg import LABEL_W, PLOT_W
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
     from pathlib import Path
 
     from pyrobots_aio.recording import Recorder, Recording
@@ -80,21 +81,19 @@ async def _play(*recorders: Recorder) -> None:
     try:
         async with robot:
             first, cautious, idle = top(robot), careful(robot), ticker(robot)
-            await robot.sleep(1)
-            first.pause("hold still")
-            await robot.sleep(1)
-            cautious.pause("operator")
-            await robot.sleep(1)
-            first.resume()
-            await robot.sleep(0.5)
-            first.pause("again")
-            await robot.sleep(0.5)
-            cautious.cancel("give up")
-            await robot.sleep(0.5)
-            first.resume()
-            await robot.sleep(0.5)
-            idle.pause("forever")
-            selfish(robot)
+            plan: list[tuple[float, Callable[..., object], tuple[object, ...]]] = [
+                (1.0, first.pause, ("hold still",)),
+                (2.0, cautious.pause, ("operator",)),
+                (3.0, first.resume, ()),
+                (3.5, first.pause, ("again",)),
+                (4.0, cautious.cancel, ("give up",)),
+                (4.5, first.resume, ()),
+                (5.0, idle.pause, ("forever",)),
+                (5.0, selfish, (robot,)),
+            ]
+            for at, call, args in plan:
+                await robot.sleep(at - robot.time())
+                call(*args)
             await robot.sleep(1)
             for recorder in recorders:
                 recorder.close()  # the recording ends with three actions still paused
