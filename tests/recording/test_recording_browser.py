@@ -23,11 +23,13 @@ from collections import Counter
 from typing import TYPE_CHECKING
 
 import pytest
+from test_recording_pauses import SPELLS, _play
 
 from pyrobots_aio.recording import JsonlRecorder, load, render_timeline_html
 from pyrobots_aio.recording._analysis import analyse
 from pyrobots_aio.recording._map import STEP_PX, marks
 from pyrobots_aio.recording._plots import plotted
+from pyrobots_aio.recording._timeline import PAUSED_INK, PAUSED_PALE
 from pyrobots_aio.sim import SimRobot, run
 from pyrobots_aio.sim.random_walk import random_walk
 
@@ -201,6 +203,33 @@ async def test_a_headless_browser_shows_the_actions(
     assert colours[GREEN] > 5000, colours
     assert colours[ORANGE] > 1000, colours
     assert colours[RED] > 300, colours
+
+
+def _rgb(colour: str) -> tuple[int, int, int]:
+    r, g, b = (int(colour[i : i + 2], 16) for i in (1, 3, 5))
+    return r, g, b
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_a_headless_browser_shows_the_paused_spells_hatched(tmp_path: Path) -> None:
+    _chromium()
+    path = tmp_path / "pauses.jsonl"
+    await _play(JsonlRecorder(path))
+    page = tmp_path / "pauses.html"
+    page.write_text(render_timeline_html(load(path)))
+
+    dom = _browse(page, tmp_path / "profile-dom", "--dump-dom").stdout
+    assert len(re.findall(r'<rect class="paused"', dom)) == 8
+    shot = tmp_path / "pauses.png"
+    _browse(page, tmp_path / "profile-shot", f"--screenshot={shot}")
+    seen = Counter(_png_pixels(shot.read_bytes())[2])
+    # 8 spells, 1716 px (of 936 px for 6 s) by 13 px: stripes of ink on the pale ground
+    spells = sum(len(s) for s in SPELLS.values())
+    assert spells == 8
+    ink, pale = _near(seen, _rgb(PAUSED_INK)), _near(seen, _rgb(PAUSED_PALE))
+    assert ink > 2000, (ink, pale)
+    assert pale > 6000, (ink, pale)
 
 
 async def _walk(path: Path) -> None:

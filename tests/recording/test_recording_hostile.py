@@ -25,7 +25,8 @@ HOSTILE = "x\"><script>alert(1)</script><img src=x onerror=alert(2)>'&"
 """Breaks out of an attribute (either quote), then of the text: a script and a handler."""
 TAGS = {
     "html", "head", "meta", "title", "style", "body", "h1", "h2", "p", "span", "i", "svg",
-    "g", "text", "rect", "line", "path", "polyline", "polygon", "circle", "script",
+    "g", "text", "rect", "line", "path", "polyline", "polygon", "circle", "script", "defs",
+    "pattern",
 }  # fmt: skip
 CLASS = re.compile(r"^[a-z_][a-z0-9_ -]*$")
 
@@ -53,6 +54,9 @@ def _hostile_run() -> list[dict[str, Any]]:
         _event(0.0, "resource.acquired", 1, h, **leaves),
         _event(0.5, "action.spawned", 2, h + "2", parent=1),
         _event(0.5, "resource.waiting", 2, h + "2", **leaves),
+        _event(0.6, "action.paused", 1, h, reason=h, by=h, paused=h),
+        _event(0.6, "action.paused", 2, h + "2", reason=h, by=1, paused=1),
+        _event(0.8, "action.resumed", 2, h + "2", resumed=h),
         _event(1.0, "resource.preempted", 1, h, resource=h, by=2, reason=h, **leaves),
         _event(1.0, "action.cancel_requested", 1, h, reason=h, by=h),
         _event(1.0, "resource.released", 1, h, **leaves),
@@ -107,6 +111,7 @@ def test_hostile_strings_in_every_field_stay_text(tmp_path: Path) -> None:
             assert not re.search("alert|script", style), (tag, style)
         assert "<script>alert" not in page
         assert HOSTILE not in page  # only ever escaped
+        assert page.count('<rect class="paused"') == 2  # the pause reasons are on the page
 
 
 def test_control_characters_from_a_recording_are_not_printed_raw(tmp_path: Path) -> None:

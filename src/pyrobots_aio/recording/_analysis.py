@@ -1,4 +1,4 @@
-"""From a recording's events to intervals: action spans, resource holds and waits.
+"""From a recording's events to intervals: action spans, pauses, resource holds and waits.
 
 Both the summary and the timeline read a recording through `analyse`, one
 pass over the events in the order they happened. Times stay in loop time.
@@ -17,6 +17,26 @@ if TYPE_CHECKING:
     from ._recording import Recording
 
 NOT_DONE = "not_done"
+STILL_PAUSED = "still paused"
+
+
+@dataclass(slots=True)
+class Pause:
+    """A spell an action spent frozen: paused, until it was resumed, cancelled or done.
+
+    ``root`` is the action whose pause froze it: itself, or an ancestor (a
+    pause freezes the whole subtree). ``ended`` says how the spell ended:
+    ``resumed``, ``cancelled`` (cancellation thaws a paused action at once),
+    ``finished``, or `STILL_PAUSED` when the recording stopped first (then
+    ``end`` is None).
+    """
+
+    start: float
+    reason: str | None = None
+    by: int | None = None
+    root: int | None = None
+    end: float | None = None
+    ended: str = STILL_PAUSED
 
 
 @dataclass(slots=True)
@@ -36,11 +56,25 @@ class Span:
     via: str | None = None
     """The resource it was preempted for, if any."""
     cancelled_at: float | None = None
+    pauses: list[Pause] = field(default_factory=list)
+    """Its frozen spells, in order (at most the last one still open)."""
 
     @property
     def begin(self) -> float:
         """When its body started (or when it was spawned, if it never started)."""
         return self.started if self.started is not None else self.spawned
+
+    @property
+    def paused(self) -> Pause | None:
+        """The spell it is frozen in at this point of the recording, if any."""
+        last = self.pauses[-1] if self.pauses else None
+        return last if last is not None and last.end is None else None
+
+    def thaw(self, time: float, ended: str) -> None:
+        """End the spell it is frozen in, if any, at ``time``."""
+        spell = self.paused
+        if spell is not None:
+            spell.end, spell.ended = time, ended
 
 
 @dataclass(slots=True)
@@ -109,7 +143,11 @@ def _on_action(found: Analysis, event: ExecEvent) -> None:
     if kind is EventKind.ACTION_SPAWNED:
         ident = event.action if event.action is not None else -1
         parent = _int(event.data.get("parent"))
-        found.spans[ident] = Span(ident, event.name or "?", parent, event.time)
+        span = found.spans[ident] = Span(ident, event.name or "?", parent, event.time)
+        above = found.spans.get(parent) if parent is not None else None
+        frozen = above.paused if above is not None else None
+        if frozen is not None:  # started by a frozen action: it starts frozen (no event says so)
+            span.pauses.append(Pause(event.time, frozen.reason, frozen.by, frozen.root))
         found._running += 1
         if found._running > found.peak:
             found.peak, found.peak_time = found._running, event.time
@@ -121,11 +159,20 @@ def _on_action(found: Analysis, event: ExecEvent) -> None:
         span.finished = event.time
         span.outcome = _str(event.data.get("outcome")) or NOT_DONE
         span.error = _str(event.data.get("error"))
+        span.thaw(event.time, "finished")
         found._running -= 1
-    elif kind is EventKind.CANCEL_REQUESTED and span.cancelled_at is None:
-        span.cancelled_at = event.time
-        span.reason = _str(event.data.get("reason"))
-        span.by = _int(event.data.get("by"))
+    elif kind is EventKind.CANCEL_REQUESTED:
+        span.thaw(event.time, "cancelled")
+        if span.cancelled_at is None:
+            span.cancelled_at = event.time
+            span.reason = _str(event.data.get("reason"))
+            span.by = _int(event.data.get("by"))
+    elif kind is EventKind.ACTION_PAUSED and span.paused is None:
+        data = event.data
+        root = _int(data.get("paused"))
+        span.pauses.append(Pause(event.time, _str(data.get("reason")), _int(data.get("by")), root))
+    elif kind is EventKind.ACTION_RESUMED:
+        span.thaw(event.time, "resumed")
     elif kind is EventKind.CANCEL_ESCALATED:
         found.escalations += 1
     elif kind is EventKind.ACTION_ABANDONED:

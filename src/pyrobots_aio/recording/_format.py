@@ -64,7 +64,7 @@ def _overview(summary: Summary) -> list[str]:
     sampled = ""
     if summary.state_samples or summary.poses:
         sampled = f" ({summary.state_samples} state samples, {summary.poses} poses)"
-    return [
+    lines = [
         f"{robot}{seed}: {summary.duration:.3f} s recorded, {summary.records} events{sampled}, "
         f"{state}",
         f"  actions            {summary.actions}: {o.succeeded} succeeded, {o.failed} failed, "
@@ -75,6 +75,19 @@ def _overview(summary: Summary) -> list[str]:
         f"by minute: {_series(summary.events_per_minute, summary.duration)}",
         f"  peak concurrency   {summary.peak_concurrency} actions{peak_at}",
     ]
+    if summary.frozen_actions:
+        lines.append(f"  paused             {paused(summary)}")
+    return lines
+
+
+def paused(summary: Summary) -> str:
+    """``3 times, 4.200 s in total (5 actions frozen)``: the pauses of a run, in words."""
+    times = "once" if summary.pauses == 1 else f"{summary.pauses} times"
+    frozen = summary.frozen_actions
+    return (
+        f"{times}, {summary.paused_time:.3f} s in total "
+        f"({frozen} action{'' if frozen == 1 else 's'} frozen)"
+    )
 
 
 def _actions(summary: Summary) -> list[str]:

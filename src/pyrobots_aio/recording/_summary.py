@@ -157,6 +157,12 @@ class Summary:
         poses: Poses recorded.
         escalations: Cancellations repeated after an action overran its grace.
         abandoned: Actions abandoned after ignoring cancellation.
+        pauses: Times an action was paused (``handle.pause``, ``robot.pause_all``: one
+            per action paused; the descendants frozen with it are not counted again).
+        paused_time: Seconds those actions spent paused, added up (a pause still on
+            when the recording stopped counts until then).
+        frozen_actions: Actions that spent any time frozen, paused themselves or
+            under a paused ancestor.
     """
 
     robot: str | None
@@ -181,6 +187,9 @@ class Summary:
     poses: int = 0
     escalations: int = 0
     abandoned: int = 0
+    pauses: int = 0
+    paused_time: float = 0.0
+    frozen_actions: int = 0
 
 
 MAX_BUCKETS = 10_000
@@ -241,6 +250,17 @@ def _cancellations(found: Analysis, start: float) -> list[Cancellation]:
     return sorted(cancels, key=lambda c: (c.time, c.action))
 
 
+def _paused(spans: Iterable[Span], stop: float) -> tuple[int, float, int]:
+    """Pauses (of the actions paused themselves), their seconds, and the actions frozen."""
+    direct = [
+        (p.end if p.end is not None else stop) - p.start
+        for s in spans
+        for p in s.pauses
+        if p.root in {None, s.id}
+    ]
+    return len(direct), math.fsum(direct), sum(1 for s in spans if s.pauses)
+
+
 def summarize(recording: Recording) -> Summary:
     """Compute the `Summary` of a recording.
 
@@ -263,6 +283,7 @@ def summarize(recording: Recording) -> Summary:
         if s.outcome == "failed" and (at := s.finished) is not None
     ]
     header = recording.header
+    pauses, paused_time, frozen = _paused(spans, recording.stop)
     return Summary(
         robot=header.robot,
         seed=header.seed,
@@ -288,4 +309,7 @@ def summarize(recording: Recording) -> Summary:
         poses=len(recording.poses),
         escalations=found.escalations,
         abandoned=found.abandoned,
+        pauses=pauses,
+        paused_time=paused_time,
+        frozen_actions=frozen,
     )

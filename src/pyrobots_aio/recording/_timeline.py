@@ -9,10 +9,12 @@ Top to bottom:
   *path* (an action name under its parent's row, so children sit indented
   under their parents), each instance a bar from its start to its end
   coloured by outcome, with a tooltip giving the parent, the outcome and, for
-  a cancelled action, who cancelled it and why; instances of one path that
-  overlap take extra lanes. Below: each resource's holds (coloured by holder,
-  named in the legend), waits and preemptions; monitor firings; boolean
-  state; then **plots** of ``v``, ``w``, each IR range and the bumper (`_plots`);
+  a cancelled action, who cancelled it and why; each spell an action spent
+  paused (frozen) is hatched over its bar, with who paused it and why in its
+  own tooltip; instances of one path that overlap take extra lanes. Below:
+  each resource's holds (coloured by holder, named in the legend), waits and
+  preemptions; monitor firings; boolean state; then **plots** of ``v``,
+  ``w``, each IR range and the bumper (`_plots`);
 - actions started and events (monitor firings) per bucket of time (figure 2),
   on the same time axis.
 
@@ -30,8 +32,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 from . import _svg
-from ._analysis import NOT_DONE, Analysis, Interval, Span, analyse
+from ._analysis import NOT_DONE, Analysis, Interval, Pause, Span, analyse
 from ._chart import rate_chart
+from ._format import paused
 from ._map import colour_bar, render_map
 from ._plots import ROW, draw_plot, plotted
 from ._summary import summarize
@@ -56,6 +59,7 @@ rect:hover { stroke: #000; stroke-width: 1; } text.in { fill: #fff; pointer-even
 text.in.dark { fill: #37474f; } text.out { fill: #455a64; pointer-events: none; }
 .succeeded { fill: #43a047; } .failed { fill: #e53935; } .cancelled { fill: #fb8c00; }
 .skipped { fill: #9e9e9e; } .not_done { fill: #1e88e5; }
+rect.paused { fill: url(#paused-hatch); } pattern rect { stroke: none; }
 .wait { fill: #cfd8dc; } .state-on { fill: #5e35b1; } .cancel-mark { stroke: #000; }
 .preempt { fill: #000; } .firing { stroke: #6a1b9a; stroke-width: 2; }
 .rate-actions { fill: #1e88e5; } .rate-events { fill: #8e24aa; }
@@ -137,6 +141,14 @@ _SCRIPT = """
 """
 """The page's only script: static text, it reads the ``data-`` attributes the page sets."""
 _OUTCOMES = frozenset(_svg.OUTCOME_COLOURS)
+PAUSED_PALE, PAUSED_INK = "#eceff1", "#a7b5bc"
+"""The paused hatch: ink stripes on a pale ground, unlike any outcome's plain colour."""
+_HATCH = (
+    '<defs><pattern id="paused-hatch" width="6" height="6" patternUnits="userSpaceOnUse" '
+    f'patternTransform="rotate(45)"><rect width="6" height="6" style="fill:{PAUSED_PALE}"/>'
+    f'<rect width="2" height="6" style="fill:{PAUSED_INK}"/></pattern></defs>'
+)
+_PAUSED_SWATCH = f"repeating-linear-gradient(45deg, {PAUSED_INK} 0 2px, {PAUSED_PALE} 2px 5px)"
 
 
 @dataclass(slots=True)
@@ -214,6 +226,10 @@ class _Canvas:
         """When ``span`` finished, or the end of the recording if it had not."""
         return span.finished if span.finished is not None else self.stop
 
+    def end_of_pause(self, spell: Pause) -> float:
+        """When ``spell`` ended, or the end of the recording if it had not."""
+        return spell.end if spell.end is not None else self.stop
+
     def rel(self, time: float) -> str:
         return f"{time - self.start:.3f}"
 
@@ -233,21 +249,28 @@ class _Canvas:
         fill: str = "",
         room: float = 0.0,
         least: float = 1.0,
+        paused: Sequence[tuple[float, float, str]] = (),
     ) -> None:
         """A bar on the current row, with a tooltip and ``text`` inside if it fits.
 
         Otherwise ``text`` goes right of the bar when the next ``room`` pixels
         are free (and is left to the tooltip when they are not). ``least`` is
         the narrowest bar drawn, in pixels, so that short pulses show.
+        ``paused`` spells (begin, end, tooltip) are hatched over the bar, under
+        its text (dark when the bar begins paused).
         """
         x, w = self.scale.x(begin), max(least, self.scale.width(begin, end))
         self.parts.append(_svg.rect(cls, (x, self.y, w, BAR_H), title, fill))
+        for start, stop, about in paused:
+            box = (self.scale.x(start), self.y, self.scale.width(start, stop), BAR_H)
+            self.parts.append(_svg.rect("paused", box, about))
         if not text:
             return
         y = self.y + BAR_H - 3
         needed = len(text) * _svg.CHAR_W + 4
         if w >= needed:
-            ink = "in dark" if cls == "wait" else "in"
+            dark = cls == "wait" or any(start <= begin < stop for start, stop, _ in paused)
+            ink = "in dark" if dark else "in"
             self.parts.append(f'<text class="{ink}" x="{x + 2:.1f}" y="{y:.1f}">{esc(text)}</text>')
         elif room - w >= needed + 2 and x + w + needed < WIDTH:
             self.parts.append(
@@ -278,7 +301,9 @@ class _Canvas:
         return (
             f'<svg class="timeline" xmlns="http://www.w3.org/2000/svg" '
             f'viewBox="0 0 {WIDTH} {height:.0f}" width="{WIDTH}" height="{height:.0f}" '
-            f"{timed_attributes(self.scale)}>" + "".join([*axis, *self.parts, cursor]) + "</svg>"
+            f"{timed_attributes(self.scale)}>{_HATCH}"
+            + "".join([*axis, *self.parts, cursor])
+            + "</svg>"
         )
 
 
@@ -296,7 +321,38 @@ def _action_title(canvas: _Canvas, span: Span) -> str:
             lines.append(f"reason: {span.reason}")
     if span.error:
         lines.append(f"error: {span.error}")
+    if span.pauses:
+        frozen = sum(canvas.end_of_pause(p) - p.start for p in span.pauses)
+        times = "once" if len(span.pauses) == 1 else f"{len(span.pauses)} times"
+        lines.append(f"paused {times}, {frozen:.3f} s in total")
     return "\n".join(lines)
+
+
+def _pause_title(canvas: _Canvas, span: Span, spell: Pause) -> str:
+    end = canvas.end_of_pause(spell)
+    lines = [
+        f"{span.name}#{span.id}: paused",
+        f"{canvas.rel(spell.start)} -> {canvas.rel(end)} s ({end - spell.start:.3f} s), "
+        + spell.ended,
+    ]
+    if spell.root is not None and spell.root != span.id:
+        lines.append(f"frozen with {canvas.found.label(spell.root)}")
+    if spell.by is not None:
+        lines.append(f"paused by {canvas.found.label(spell.by)}")
+    if spell.reason:
+        lines.append(f"reason: {spell.reason}")
+    return "\n".join(lines)
+
+
+def _paused(canvas: _Canvas, span: Span) -> list[tuple[float, float, str]]:
+    """The spells ``span`` spent paused, within its bar, with their tooltips."""
+    first, last = span.begin, canvas.end_of(span)
+    spells = []
+    for spell in span.pauses:
+        begin, end = max(first, spell.start), min(last, canvas.end_of_pause(spell))
+        if end >= begin:
+            spells.append((begin, end, _pause_title(canvas, span, spell)))
+    return spells
 
 
 def _begin(span: Span) -> float:
@@ -327,6 +383,7 @@ def _draw_actions(canvas: _Canvas) -> None:
                 _action_title(canvas, span),
                 text=f"{span.name}#{span.id}",
                 room=room,
+                paused=_paused(canvas, span),
             )
             if span.cancelled_at is not None:
                 canvas.tick("cancel-mark", span.cancelled_at, f"cancel requested: {span.reason}")
@@ -444,11 +501,12 @@ def _facts(recording: Recording) -> str:
     robot = esc(summary.robot or "unknown robot")
     seed = f", seed {summary.seed}" if summary.seed is not None else ""
     where = f"{esc(recording.path)} &middot; " if recording.path else ""
+    pauses = f"paused {paused(summary)} &middot; " if summary.frozen_actions else ""
     return (
         f'<p class="facts">{where}{robot}{seed} &middot; {summary.duration:.3f} s &middot; '
         f"{summary.actions} actions ({o.succeeded} succeeded, {o.failed} failed, "
         f"{o.cancelled} cancelled, {o.skipped} skipped, {o.not_done} not done) &middot; "
-        f"peak concurrency {summary.peak_concurrency} &middot; "
+        f"peak concurrency {summary.peak_concurrency} &middot; {pauses}"
         f"{summary.mean_actions_per_minute:.1f} actions and "
         f"{summary.mean_events_per_minute:.1f} events per minute</p>"
     )
@@ -460,7 +518,11 @@ def _swatches(items: Iterable[tuple[str, str]]) -> str:
 
 def _legend(canvas: _Canvas) -> str:
     swatches = [(name.replace("_", " "), colour) for name, colour in _svg.OUTCOME_COLOURS.items()]
-    swatches += [("waiting for a resource", "#cfd8dc"), ("state true", "#5e35b1")]
+    swatches += [
+        ("paused", _PAUSED_SWATCH),
+        ("waiting for a resource", "#cfd8dc"),
+        ("state true", "#5e35b1"),
+    ]
     holders = ""
     if canvas.holders:
         holders = (
@@ -507,7 +569,8 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
 
     Returns:
         The page. Each action is a ``rect`` of class ``action`` plus its outcome
-        (``succeeded`` ...), with a tooltip; resource holds are ``rect.hold``,
+        (``succeeded`` ...), with a tooltip, and each spell it spent paused a
+        ``rect.paused`` over it (hatched); resource holds are ``rect.hold``,
         waits ``rect.wait``, monitor firings ``line.firing``; on the map
         (``svg.map``), the path is ``polyline.trail`` and the marks
         ``path.mark``; the sensor plots are ``polyline.plot`` and
