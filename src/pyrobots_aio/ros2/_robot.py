@@ -83,10 +83,15 @@ def _yaw(q: Any) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
+def _float32(value: float) -> float:
+    """A float32 field as the decimal it was written as (``0.4``, not ``0.4000000059604645``)."""
+    return float(f"{value:.7g}")
+
+
 def _range(message: Any) -> float:
     """A ``Range`` reading in metres; the sensor's range when nothing is in it (+inf, REP 117)."""
-    reading, limit = float(message.range), float(message.max_range)
-    return limit if not math.isfinite(reading) or reading > limit else reading
+    reading, limit = float(message.range), _float32(message.max_range)
+    return limit if not math.isfinite(reading) or reading > limit else _float32(reading)
 
 
 class _Frames:
