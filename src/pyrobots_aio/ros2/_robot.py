@@ -264,7 +264,7 @@ class Ros2Robot(DriveBase):
             raise ValueError(msg)
         names.update(topics or {})
         for role, topic in names.items():
-            check_topic(topic, f"topic name for {role!r}")
+            check_topic(topic, f"{role} topic name")
         return names
 
     # -- the DriveBase seam ---------------------------------------------------------
