@@ -303,6 +303,18 @@ class Ros2Robot(DriveBase):
 
     # -- facts ----------------------------------------------------------------------
 
+    @property
+    def cmd_vel(self) -> Ros2Publisher[Any]:
+        """The ``cmd_vel`` publisher (``await robot.cmd_vel.wait_for_subscribers()`` ...).
+
+        Raises:
+            Ros2Error: The robot is not running.
+        """
+        if self._cmd is None:
+            msg = f"{self!r} is not running: its cmd_vel publisher exists inside 'async with'"
+            raise Ros2Error(msg)
+        return self._cmd
+
     def odom_age(self) -> float | None:
         """Seconds (robot clock) since the last odometry message; None before any."""
         if self._last_odom is None or not self.is_running:
@@ -367,6 +379,10 @@ class Ros2Robot(DriveBase):
             raise Ros2Error(msg) from None
         self.state.update(odom_stale=False)
 
+    @property
+    def _odom_topic(self) -> str:
+        return self._subscriptions[0].topic if self._subscriptions else self.topics["odom"]
+
     @staticmethod
     async def _first(sub: Ros2Subscription) -> None:
         if sub.received == 0:
@@ -400,7 +416,7 @@ class Ros2Robot(DriveBase):
             self._period += 0.1 * (stamp - self._stamp - self._period)
         self._stamp, self._last_odom = stamp, now
         if self._stale is not None:
-            _log.info("odometry on %s is back: the base is live again", self.topics["odom"])
+            _log.info("odometry on %s is back: the base is live again", self._odom_topic)
             self._stale = None
             self.state.update(odom_stale=False)
         if self._stale_timer is None:
@@ -411,9 +427,10 @@ class Ros2Robot(DriveBase):
             self._send()
 
     def _arm(self, when: float) -> None:
-        self._stale_timer = asyncio.get_running_loop().call_at(when, self._check_odom)
+        self._stale_timer = asyncio.get_running_loop().call_at(when, self._check_odom, when)
 
-    def _check_odom(self) -> None:
+    def _check_odom(self, when: float) -> None:
+        """The odometry timer: stale if nothing came for ``odom_timeout`` (the loop's lag aside)."""
         self._stale_timer = None
         if self._last_odom is None:
             return
@@ -422,10 +439,19 @@ class Ros2Robot(DriveBase):
         if now < due:
             self._arm(due)
             return
+        if now - when > self.odom_timeout / 2:
+            # The loop itself was held up (blocking code): the ROS thread may have been
+            # starved of the GIL too. Odometry gets a fresh window before it counts as stale.
+            _log.debug("odometry check %.3f s late: the loop was blocked; looking again", now - when)
+            self._arm(now + self.odom_timeout)
+            return
+        self._go_stale(now)
+
+    def _go_stale(self, now: float) -> None:
+        assert self._last_odom is not None  # called after odometry came
         topic = self._cmd.topic if self._cmd is not None else self.topics["cmd_vel"]
-        odom = self._subscriptions[0].topic if self._subscriptions else self.topics["odom"]
         error = MotionError(
-            f"odometry on {odom} is stale: no message for {now - self._last_odom:.2f} s "
+            f"odometry on {self._odom_topic} is stale: no message for {now - self._last_odom:.2f} s "
             f"(odom_timeout {self.odom_timeout:g} s); the base was stopped (zero Twist on "
             f"{topic}) and refuses to move until odometry comes back — is its driver running?"
         )
