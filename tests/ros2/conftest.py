@@ -59,9 +59,9 @@ def pytest_asyncio_loop_factories(
     rate = getattr(getattr(item, "module", None), "LOOP_RATE", None)
     if rate is None:
         return None
-    from pyrobots_aio.cli._sim_node import ScaledTimeLoop
+    from pyrobots_aio.ros2 import scaled_loop
 
-    return {f"x{rate}": lambda: ScaledTimeLoop(rate)}
+    return {f"x{rate}": lambda: scaled_loop(rate)}
 
 
 @pytest.fixture(autouse=True)

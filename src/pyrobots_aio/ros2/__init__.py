@@ -32,6 +32,8 @@ from ._robot import CLIFF_SENSORS as CLIFF_SENSORS
 from ._robot import DOCK_IN_ODOM as DOCK_IN_ODOM
 from ._robot import IR_SENSORS as IR_SENSORS
 from ._robot import Ros2Robot as Ros2Robot
+from ._run import run as run
+from ._run import scaled_loop as scaled_loop
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
@@ -48,5 +50,7 @@ __all__ = [
     "attach_ros2",
     "qos_profile",
     "ros_name",
+    "run",
+    "scaled_loop",
     "staleness",
 ]
