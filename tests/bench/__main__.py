@@ -40,6 +40,7 @@ GOALS: dict[str, tuple[str, Callable[[float], bool]]] = {
     "walk_recording_overhead_ratio": ("<= 1.5x no recording", lambda v: v <= 1.5),
     "ros2_topic_to_callback_p99_ratio": ("<= 1.5x plain rclpy, p99", lambda v: v <= 1.5),
     "ros2_publish_to_wire_p99_ratio": ("<= 1.5x plain rclpy, p99", lambda v: v <= 1.5),
+    "ros2_drive_to_wire_p99_ratio": ("<= 1.5x plain rclpy, p99", lambda v: v <= 1.5),
 }
 
 

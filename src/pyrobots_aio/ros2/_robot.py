@@ -20,7 +20,7 @@ import numpy as np
 from .._exceptions import MotionError, Ros2Error
 from ..motion import Controllers, DriveBase
 from ._node import _positive, attach_ros2
-from ._rclpy import check_topic, rclpy_module
+from ._rclpy import check_message_type, check_topic, rclpy_module
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Collection, Iterable, Mapping
@@ -240,9 +240,10 @@ class Ros2Robot(DriveBase):
         self._command: tuple[float, float] = (0.0, 0.0)
         self._sent = False
         self._cmd: Ros2Publisher[Any] | None = None
-        # Imported now, off the running loop: a message package takes a tenth of a second.
+        # Imported and their type supports loaded now, before the robot runs: that takes a
+        # tenth of a second, which would block the running loop.
         self._types = tuple(
-            getattr(rclpy_module(f"{package}.msg"), kind)
+            check_message_type(getattr(rclpy_module(f"{package}.msg"), kind))
             for package, kind in (
                 ("geometry_msgs", "Twist"),
                 ("nav_msgs", "Odometry"),
