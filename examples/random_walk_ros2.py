@@ -16,7 +16,8 @@ another shell and pass ``--external``::
 Needs the ``ros2`` and ``sim`` extras (``pip install -e ".[sim,ros2]"``).
 Discovery stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
 unless set); with a sim-node of its own, the script also draws a random
-``ROS_DOMAIN_ID`` unless one is set, so it never drives anyone else's robot. Run: ``python examples/random_walk_ros2.py [--moves N] [--seed N]``
+``ROS_DOMAIN_ID`` unless one is set, so it never drives anyone else's robot.
+Run: ``python examples/random_walk_ros2.py [--moves N] [--seed N]``
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ from pyrobots_aio.cli import install_console_handler
 from pyrobots_aio.ros2 import Ros2Robot, run
 from pyrobots_aio.sim.random_walk import WalkReport, random_walk
 
+COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]  # pyrobots-aio sim-node
+
 
 async def main(namespace: str, moves: int, seed: int) -> WalkReport:
     async with Ros2Robot(namespace=namespace) as robot:
@@ -40,8 +43,7 @@ async def main(namespace: str, moves: int, seed: int) -> WalkReport:
 def start_sim_node(namespace: str, rate: float) -> subprocess.Popen[str]:
     """``pyrobots-aio sim-node`` in a subprocess, once it says it is ready."""
     node = subprocess.Popen(
-        [sys.executable, "-m", "pyrobots_aio.cli", "sim-node", "--namespace", namespace]
-        + ["--rate", str(rate)],
+        [*COMMAND, "--namespace", namespace, "--rate", str(rate)],
         stdout=subprocess.PIPE,
         text=True,
     )

@@ -89,7 +89,9 @@ def _helper(mode: str) -> None:
         _feed_odometry(node)
         print("ready", flush=True)
         sys.stdin.readline()
-        print(json.dumps({k: {v: t for v, t in f.items() if v} for k, f in first.items()}), flush=True)
+        print(
+            json.dumps({k: {v: t for v, t in f.items() if v} for k, f in first.items()}), flush=True
+        )
     elif mode == "receive":
         got: dict[str, list[int]] = {"bridge": [], "plain": []}
         for kind in got:

@@ -159,9 +159,7 @@ SIM_NODE = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]
 @contextlib.contextmanager
 def sim_node_process(*args: str) -> Iterator[subprocess.Popen[bytes]]:
     """A sim-node process (``args``: its options), up and ready; killed if still running after."""
-    process = subprocess.Popen(
-        [*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE
-    )
+    process = subprocess.Popen([*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         assert process.stdout is not None
         ready = process.stdout.readline()

@@ -39,7 +39,9 @@ async def test_the_example_walks_a_sim_node_over_ros2_bumps_and_docks() -> None:
             await process.wait()
     assert process.returncode == 0, err.decode()
     lines = out.decode().splitlines()
-    assert re.fullmatch(r"sim-node /example/sim_node ready \(domain \d+, x4 real time\): .*", lines[0])
+    assert re.fullmatch(
+        r"sim-node /example/sim_node ready \(domain \d+, x4 real time\): .*", lines[0]
+    )
     summary = re.fullmatch(
         r"5 moves, (\d+) bumps handled, (\d+) moves interrupted, docked, ([\d.]+) s simulated",
         lines[-1],

@@ -42,7 +42,9 @@ _namespaces = itertools.count()
 
 pytestmark = [pytest.mark.asyncio]
 
-test_odom_and_map_poses_agree_with_the_frames = _motion.test_odom_and_map_poses_agree_with_the_frames
+test_odom_and_map_poses_agree_with_the_frames = (
+    _motion.test_odom_and_map_poses_agree_with_the_frames
+)
 test_drive_distance_and_rotate_angle_reach_their_targets = (
     _motion.test_drive_distance_and_rotate_angle_reach_their_targets
 )
@@ -105,4 +107,3 @@ async def test_starts_docked_with_the_state_keys_and_frames(base: Any) -> None:
         version = robot.state.version("v")
         await robot.sleep(1.0)
         assert robot.state.version("v") - version == pytest.approx(50, abs=1)
-

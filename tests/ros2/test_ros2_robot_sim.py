@@ -12,7 +12,7 @@ import signal
 from typing import TYPE_CHECKING
 
 import pytest
-from ros2_support import DEADLINE, next_where, require_rclpy, sim_node_process
+from ros2_support import DEADLINE, require_rclpy, sim_node_process
 
 require_rclpy()
 pytest.importorskip(
@@ -45,7 +45,9 @@ async def test_a_sim_node_killed_mid_walk_makes_the_walk_fail_stale_not_hang(
         async with asyncio.timeout(TIMEOUT), Ros2Robot(namespace="/doomed") as robot:
             await robot.cmd_vel.wait_for_subscribers(2)  # the sim-node's and the listener's
             walk = asyncio.ensure_future(random_walk(robot, duration=60))
-            await robot.wait(lambda r: r.odom_pose()[0] > 0.6, poll=0.05)  # undocked and driving out
+            await robot.wait(
+                lambda r: r.odom_pose()[0] > 0.6, poll=0.05
+            )  # undocked and driving out
             assert not walk.done()
             process.send_signal(signal.SIGKILL)
             with pytest.raises(MotionError) as caught:

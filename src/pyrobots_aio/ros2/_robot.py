@@ -358,14 +358,14 @@ class Ros2Robot(DriveBase):
                 qos="sensor_data",
             )
         ]
-        for key in self._ir:
-            subs.append(
-                ros2.subscribe(
-                    topics[key], ray, lambda m, k=key: {k: _range(m)}, qos="sensor_data"
-                )
-            )
-        for key in (*FLAGS, *self._cliff):
-            subs.append(ros2.subscribe(topics[key], flag, {key: "data"}, qos="sensor_data"))
+        subs += [
+            ros2.subscribe(topics[key], ray, lambda m, k=key: {k: _range(m)}, qos="sensor_data")
+            for key in self._ir
+        ]
+        subs += [
+            ros2.subscribe(topics[key], flag, {key: "data"}, qos="sensor_data")
+            for key in (*FLAGS, *self._cliff)
+        ]
         self._subscriptions = subs
         try:
             async with asyncio.timeout(self.connect_timeout):
@@ -443,7 +443,9 @@ class Ros2Robot(DriveBase):
         if now - when > self.odom_timeout / 2:
             # The loop itself was held up (blocking code): the ROS thread may have been
             # starved of the GIL too. Odometry gets a fresh window before it counts as stale.
-            _log.debug("odometry check %.3f s late: the loop was blocked; looking again", now - when)
+            _log.debug(
+                "odometry check %.3f s late: the loop was blocked; looking again", now - when
+            )
             self._arm(now + self.odom_timeout)
             return
         self._go_stale(now)
@@ -451,8 +453,9 @@ class Ros2Robot(DriveBase):
     def _go_stale(self, now: float) -> None:
         assert self._last_odom is not None  # called after odometry came
         topic = self._cmd.topic if self._cmd is not None else self.topics["cmd_vel"]
+        age = now - self._last_odom
         error = MotionError(
-            f"odometry on {self._odom_topic} is stale: no message for {now - self._last_odom:.2f} s "
+            f"odometry on {self._odom_topic} is stale: no message for {age:.2f} s "
             f"(odom_timeout {self.odom_timeout:g} s); the base was stopped (zero Twist on "
             f"{topic}) and refuses to move until odometry comes back — is its driver running?"
         )
