@@ -37,7 +37,8 @@ async def test_the_example_walks_a_sim_node_over_ros2_bumps_and_docks() -> None:
         if process.returncode is None:
             process.kill()
             await process.wait()
-    assert process.returncode == 0, err.decode()
+    told = f"stdout:\n{out.decode()}\nstderr (end):\n{err.decode()[-3000:]}"
+    assert process.returncode == 0, told
     lines = out.decode().splitlines()
     assert re.fullmatch(
         r"sim-node /example/sim_node ready \(domain \d+, x4 real time\): .*", lines[0]
@@ -46,9 +47,9 @@ async def test_the_example_walks_a_sim_node_over_ros2_bumps_and_docks() -> None:
         r"5 moves, (\d+) bumps handled, (\d+) moves interrupted, docked, ([\d.]+) s simulated",
         lines[-1],
     )
-    assert summary is not None, lines
-    assert float(summary[3]) > 20  # it drove out, made its moves and came back
+    assert summary is not None, told
+    assert float(summary[3]) > 20, told  # it drove out, made its moves and came back
     # Seed 0 runs into a wall: the reflex preempted a move, and the walk went on to its end.
-    assert int(summary[1]) >= 1
-    assert int(summary[2]) >= 1
+    assert int(summary[1]) >= 1, told
+    assert int(summary[2]) >= 1, told
     assert "ROS 2 node /example/pyrobots_aio up" in err.decode()
