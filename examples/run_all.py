@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 import time
@@ -9,12 +10,20 @@ from pathlib import Path
 
 HERE = Path(__file__).parent
 TIME_LIMIT = 600
+NEEDS = {
+    "random_walk_ros2.py": ("rclpy", 'the ROS 2 wheels: pip install -e ".[sim,ros2]"'),
+}
+"""Examples that need an optional extra: the module they import, and what to install."""
 
 
 def main() -> int:
     failed = []
     for script in sorted(HERE.glob("*.py")):
         if script.name == Path(__file__).name:
+            continue
+        module, install = NEEDS.get(script.name, ("", ""))
+        if module and importlib.util.find_spec(module) is None:
+            print(f"{script.name:28} {'skipped':18}   needs {module}, not installed: {install}")
             continue
         start = time.monotonic()
         done = subprocess.run(

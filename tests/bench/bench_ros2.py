@@ -11,6 +11,11 @@ in an ``std_msgs/Int64`` and the receiver subtracts it from its own clock.
 - ``publish_to_wire_*``: ``robot.ros2.publisher(...).publish`` (what
   ``drive()`` will use) until the message reaches another process, beside a
   plain rclpy publisher in the same process, alternately;
+- ``drive_to_wire_*``: `Ros2Robot.drive` (checks, the e-stop latch, a
+  ``Twist`` built and published on ``cmd_vel``) until the ``Twist`` reaches
+  another process, beside a plain rclpy ``Twist`` built and published in the
+  same process, alternately (each command's speed tells it apart; the other
+  process feeds the robot the odometry it needs to run);
 - ``flood_*``: a burst from another process as fast as it can send, counted
   into the state by the bridge and by a plain rclpy callback beside it.
 
@@ -69,7 +74,25 @@ def _helper(mode: str) -> None:
 
     plain = _Plain(f"bench_{mode}")
     node = plain.node
-    if mode == "receive":
+    if mode == "twists":
+        from geometry_msgs.msg import Twist
+
+        # The first arrival of each command (the bridge re-sends one with each odometry).
+        first: dict[str, dict[float, int]] = {"bridge": {}, "plain": {}}
+        for kind in first:
+            node.create_subscription(
+                Twist,
+                f"/bench/{kind}/cmd_vel",
+                lambda m, k=kind: first[k].setdefault(m.linear.x, time.perf_counter_ns()),
+                1000,
+            )
+        _feed_odometry(node)
+        print("ready", flush=True)
+        sys.stdin.readline()
+        print(
+            json.dumps({k: {v: t for v, t in f.items() if v} for k, f in first.items()}), flush=True
+        )
+    elif mode == "receive":
         got: dict[str, list[int]] = {"bridge": [], "plain": []}
         for kind in got:
             node.create_subscription(
@@ -97,6 +120,25 @@ def _helper(mode: str) -> None:
         print("done", flush=True)
         sys.stdin.readline()
     plain.close()
+
+
+def _feed_odometry(node: object) -> None:
+    """Publish what a `Ros2Robot` on ``/bench`` waits for (odometry, flags) at 50 Hz."""
+    from nav_msgs.msg import Odometry
+    from std_msgs.msg import Bool
+
+    odom = node.create_publisher(Odometry, "/bench/bridge/odom", 10)  # type: ignore[attr-defined]
+    flags = [
+        node.create_publisher(Bool, f"/bench/bridge/{key}", 10)  # type: ignore[attr-defined]
+        for key in ("bumper", "bumper_left", "bumper_right", "docked")
+    ]
+
+    def publish() -> None:
+        odom.publish(Odometry())
+        for flag in flags:
+            flag.publish(Bool())
+
+    node.create_timer(0.02, publish)  # type: ignore[attr-defined]
 
 
 def _start(mode: str) -> subprocess.Popen[str]:
@@ -209,6 +251,54 @@ async def _publish_to_wire() -> dict[str, float]:
     }
 
 
+# -- drive() -> cmd_vel on the wire ---------------------------------------------------------
+
+
+async def _drive_to_wire() -> dict[str, float]:
+    from geometry_msgs.msg import Twist
+
+    from pyrobots_aio.ros2 import Ros2Robot
+
+    receiver = _start("twists")
+    plain = _Plain("bench_plain_twist")
+    plain_pub = plain.node.create_publisher(Twist, "/bench/plain/cmd_vel", 1000)
+    robot = Ros2Robot(namespace="/bench/bridge", ir_sensors=(), cliff_sensors=())
+    sent: dict[str, dict[int, int]] = {"bridge": {}, "plain": {}}
+
+    def plain_drive(v: float) -> None:
+        twist = Twist()
+        twist.linear.x = v
+        plain_pub.publish(twist)
+
+    try:
+        async with robot:
+            await robot.cmd_vel.wait_for_subscribers()
+            while plain_pub.get_subscription_count() < 1:  # noqa: ASYNC110 - a graph fact
+                await asyncio.sleep(0.01)
+            await asyncio.sleep(0.5)  # matched from the receiver's side too
+            drives = [("bridge", lambda v: robot.drive(v, 0.0)), ("plain", plain_drive)]
+            for n in range(1, LATENCY_N + 1):  # each command's speed, n, tells it apart
+                for kind, drive in drives if n % 2 else drives[::-1]:
+                    sent[kind][n] = time.perf_counter_ns()
+                    drive(float(n))
+                await asyncio.sleep(PERIOD)
+            robot.stop()
+            await asyncio.sleep(0.5)
+            got = json.loads(_tell(receiver, ""))
+    finally:
+        receiver.wait()
+        plain.close()
+    latency = {
+        kind: [arrived - sent[kind][int(float(v))] for v, arrived in got[kind].items()]
+        for kind in sent
+    }
+    return {
+        **_stats("drive_to_wire_bridge", latency["bridge"]),
+        **_stats("drive_to_wire_plain_rclpy", latency["plain"]),
+        "ros2_drive_to_wire_p99_ratio": _p99(latency["bridge"]) / _p99(latency["plain"]),
+    }
+
+
 # -- flood ------------------------------------------------------------------------------------
 
 
@@ -268,7 +358,7 @@ def run() -> dict[str, float]:
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(102, 200)))
     results: dict[str, float] = {}
-    for bench in (_topic_to_callback, _publish_to_wire, _flood):
+    for bench in (_topic_to_callback, _publish_to_wire, _drive_to_wire, _flood):
         results.update(asyncio.run(bench()))
     return results
 

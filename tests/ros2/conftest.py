@@ -11,6 +11,7 @@ instead. These are real-time tests: they wait on events under generous
 
 from __future__ import annotations
 
+import asyncio
 import importlib.util
 import os
 import random
@@ -22,7 +23,7 @@ import pytest
 import pytest_asyncio
 
 if TYPE_CHECKING:
-    from collections.abc import AsyncIterator, Callable, Iterator
+    from collections.abc import AsyncIterator, Callable, Iterator, Mapping
 
 from ros2_support import SKIP_REASON, PlainNode
 
@@ -44,6 +45,23 @@ else:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
         importlib.import_module("lark")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_asyncio_loop_factories(
+    config: pytest.Config, item: pytest.Item
+) -> Mapping[str, Callable[[], asyncio.AbstractEventLoop]] | None:
+    """A module with ``LOOP_RATE = R`` runs its tests on a loop whose clock runs R times faster.
+
+    Beside a ``sim-node --rate R``: the test's sleeps and timeouts, and the
+    robot's clock, then last as long in simulated seconds as they say.
+    """
+    rate = getattr(getattr(item, "module", None), "LOOP_RATE", None)
+    if rate is None:
+        return None
+    from pyrobots_aio.ros2 import scaled_loop
+
+    return {f"x{rate}": lambda: scaled_loop(rate)}
 
 
 @pytest.fixture(autouse=True)

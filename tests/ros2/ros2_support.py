@@ -9,13 +9,18 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import importlib.util
+import subprocess
+import sys
 import threading
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pytest
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Iterator
+    from types import ModuleType
 
 SKIP_REASON = (
     "the ROS 2 Python wheels are not installed: pip install 'pyrobots-aio[ros2]' "
@@ -146,3 +151,39 @@ async def meet(robot: Any, server: PlainNode, name: str, interface: type) -> Non
     await robot.ros2.wait_for_server(name, interface)
     node, namespace, action = robot.ros2.name, robot.ros2.namespace, hasattr(interface, "Goal")
     await wait_for(lambda: server.knows_client(node, namespace, name, action=action))
+
+
+SIM_NODE = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]
+
+
+@contextlib.contextmanager
+def sim_node_process(*args: str) -> Iterator[subprocess.Popen[bytes]]:
+    """A sim-node process (``args``: its options), up and ready; killed if still running after."""
+    process = subprocess.Popen([*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        assert process.stdout is not None
+        ready = process.stdout.readline()
+        if b" ready " not in ready:
+            process.kill()
+            _, err = process.communicate()
+            raise AssertionError((ready + err).decode(errors="replace"))
+        yield process
+    finally:
+        if process.poll() is None:
+            process.kill()
+        process.communicate()
+
+
+def load_suite(name: str, file: str | None = None) -> ModuleType:
+    """The module ``tests/motion/<file or name>.py`` (the shared motion suite), imported once."""
+    path = Path(__file__).parent.parent / "motion" / f"{file or name}.py"
+    module = sys.modules.get(name)
+    if module is not None and Path(module.__file__ or "") == path:
+        return module
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module

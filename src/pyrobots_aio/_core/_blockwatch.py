@@ -66,6 +66,7 @@ MIN_BLOCK_THRESHOLD = 0.01
 JOIN_BOUND = 5.0
 """Seconds `BlockWatch.stop` waits for the thread (only a stuck log handler could need it)."""
 
+
 def runqueue_wait(native_id: int) -> float | None:
     """Seconds thread ``native_id`` of this process has waited for a CPU so far (None: unknown).
 

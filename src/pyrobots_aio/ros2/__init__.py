@@ -16,6 +16,10 @@ running inside ``async with robot``:
   state, the goal's result is the action's result;
 - ``/diagnostics`` reports whether the watched state is fresh.
 
+`Ros2Robot` is a `pyrobots_aio.motion.DriveBase` over standard messages
+(``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock ``Bool``): the motion
+actions and the random walk run on it as on the simulator.
+
 Layer: beside ``sim``, on the public API only.
 """
 
@@ -24,17 +28,29 @@ from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
 from ._rclpy import qos_profile as qos_profile
 from ._rclpy import ros_name as ros_name
+from ._robot import CLIFF_SENSORS as CLIFF_SENSORS
+from ._robot import DOCK_IN_ODOM as DOCK_IN_ODOM
+from ._robot import IR_SENSORS as IR_SENSORS
+from ._robot import Ros2Robot as Ros2Robot
+from ._run import run as run
+from ._run import scaled_loop as scaled_loop
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
 
 __all__ = [
+    "CLIFF_SENSORS",
+    "DOCK_IN_ODOM",
+    "IR_SENSORS",
     "Ros2Node",
     "Ros2Publisher",
+    "Ros2Robot",
     "Ros2Subscription",
     "ToState",
     "attach_ros2",
     "qos_profile",
     "ros_name",
+    "run",
+    "scaled_loop",
     "staleness",
 ]

@@ -1,0 +1,78 @@
+"""The random walk over ROS 2: `Ros2Robot` drives ``pyrobots-aio sim-node`` in another process.
+
+The very code of ``examples/random_walk.py`` (`pyrobots_aio.sim.random_walk`),
+on a robot that it reaches only through ROS 2 topics: ``cmd_vel`` out;
+odometry, IR ranges, bumper, cliff and dock state in. The bumper reflex still
+preempts the current move and hands control back to the walk.
+
+By default this script starts the sim-node itself (four times faster than
+real time, with ``/clock``; its own loop runs at the same rate) and stops it
+at the end. To drive a sim-node (or a real robot) of your own, start it in
+another shell and pass ``--external``::
+
+    pyrobots-aio sim-node --namespace /robot1 --rate 4
+    python examples/random_walk_ros2.py --external --rate 4
+
+Needs the ``ros2`` and ``sim`` extras (``pip install -e ".[sim,ros2]"``).
+Discovery stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
+unless set); with a sim-node of its own, the script also draws a random
+``ROS_DOMAIN_ID`` unless one is set, so it never drives anyone else's robot.
+Run: ``python examples/random_walk_ros2.py [--moves N] [--seed N]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import subprocess
+import sys
+
+from pyrobots_aio.cli import install_console_handler
+from pyrobots_aio.ros2 import Ros2Robot, run
+from pyrobots_aio.sim.random_walk import WalkReport, random_walk
+
+COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]  # pyrobots-aio sim-node
+
+
+async def main(namespace: str, moves: int, seed: int) -> WalkReport:
+    async with Ros2Robot(namespace=namespace) as robot:
+        return await random_walk(robot, moves=moves, seed=seed)
+
+
+def start_sim_node(namespace: str, rate: float) -> subprocess.Popen[str]:
+    """``pyrobots-aio sim-node`` in a subprocess, once it says it is ready."""
+    node = subprocess.Popen(
+        [*COMMAND, "--namespace", namespace, "--rate", str(rate)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert node.stdout is not None
+    print(node.stdout.readline().strip(), flush=True)
+    return node
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--namespace", default="/robot1")
+    parser.add_argument("--rate", type=float, default=4.0, help="the sim-node's rate")
+    parser.add_argument("--moves", type=int, default=5)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--external", action="store_true", help="drive a sim-node of your own")
+    options = parser.parse_args()
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    if not options.external:  # the sim-node inherits it
+        os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 101)))
+    install_console_handler()
+    sim_node = None if options.external else start_sim_node(options.namespace, options.rate)
+    try:
+        report = run(main, options.namespace, options.moves, options.seed, rate=options.rate)
+    finally:
+        if sim_node is not None:
+            sim_node.terminate()
+            sim_node.wait()
+    print(
+        f"{report.moves} moves, {report.bumps} bumps handled, {report.interrupted} moves "
+        f"interrupted, {'docked' if report.docked else 'NOT docked'}, "
+        f"{report.sim_time:.1f} s simulated"
+    )

@@ -1,0 +1,55 @@
+"""``examples/random_walk_ros2.py`` runs as a user would run it: it starts its own sim-node."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import sys
+from pathlib import Path
+
+import pytest
+from ros2_support import DEADLINE, require_rclpy
+
+require_rclpy()
+pytest.importorskip(
+    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
+)
+
+EXAMPLE = Path(__file__).parent.parent.parent / "examples" / "random_walk_ros2.py"
+
+
+@pytest.mark.asyncio
+async def test_the_example_walks_a_sim_node_over_ros2_bumps_and_docks() -> None:
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        str(EXAMPLE),
+        "--namespace",
+        "/example",
+        "--moves",
+        "5",
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    try:
+        async with asyncio.timeout(DEADLINE * 2):
+            out, err = await process.communicate()
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    told = f"stdout:\n{out.decode()}\nstderr (end):\n{err.decode()[-3000:]}"
+    assert process.returncode == 0, told
+    lines = out.decode().splitlines()
+    assert re.fullmatch(
+        r"sim-node /example/sim_node ready \(domain \d+, x4 real time\): .*", lines[0]
+    )
+    summary = re.fullmatch(
+        r"5 moves, (\d+) bumps handled, (\d+) moves interrupted, docked, ([\d.]+) s simulated",
+        lines[-1],
+    )
+    assert summary is not None, told
+    assert float(summary[3]) > 20, told  # it drove out, made its moves and came back
+    # Seed 0 runs into a wall: the reflex preempted a move, and the walk went on to its end.
+    assert int(summary[1]) >= 1, told
+    assert int(summary[2]) >= 1, told
+    assert "ROS 2 node /example/pyrobots_aio up" in err.decode()
