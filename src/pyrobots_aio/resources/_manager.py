@@ -8,7 +8,8 @@ request that cannot, since everything behind it on that leaf yields to it.
 Only when some descendant of a blocking holder waits (an exemption might
 apply) does a scan go past it. Granted waiters are woken through their own
 future: no thundering herd, no polling, and a hand-off costs the same with
-one waiter or a thousand.
+one waiter or a thousand. Lending to ``preempt="suspend"`` requests is in
+`_loans` (its docstring gives the semantics).
 """
 
 from __future__ import annotations
@@ -20,15 +21,18 @@ from typing import TYPE_CHECKING, Generic, NoReturn
 
 from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._exceptions import ActionSkipped, LockUsageError
-from . import _rules
+from . import _loans, _rules
 from ._grant import (
     HELD,
     RELEASED,
+    SUSPEND,
     WAITING,
     Grant,
     Leaf,
+    Options,
     Owner,
     OwnerT,
+    Preempt,
     check_options,
     holder,
     who,
@@ -100,6 +104,7 @@ class ResourceManager(Generic[OwnerT]):
         self._work: list[Leaf[OwnerT]] = []
         self._marked: set[Grant[OwnerT]] = set()
         self._flushing = False
+        self._loans: _loans.Loans[OwnerT] = _loans.Loans()
 
     # -- taking and giving back -------------------------------------------
 
@@ -109,7 +114,7 @@ class ResourceManager(Generic[OwnerT]):
         *resources: AnyResource,
         wait: bool = True,
         priority: int = 0,
-        preempt: bool = False,
+        preempt: Preempt = False,
     ) -> Grant[OwnerT]:
         """Take every leaf of ``resources`` at once for ``owner``, waiting if need be.
 
@@ -121,7 +126,10 @@ class ResourceManager(Generic[OwnerT]):
             preempt: Cancel the holders in the way if all have a lower priority,
                 then wait until they are done, behind any earlier queued request
                 of equal or higher priority (with ``wait`` False: only if there
-                is none, else skip without cancelling anyone).
+                is none, else skip without cancelling anyone). ``"suspend"``:
+                suspend them instead and borrow their resources at once, as
+                soon as nothing queued ahead must go first; they get them back,
+                and resume, when ``owner`` lets go (see `_loans`).
 
         Returns:
             The `Grant`, held; call its ``release()`` when done.
@@ -136,7 +144,12 @@ class ResourceManager(Generic[OwnerT]):
         if _rules.grantable(grant, self._below):
             self._grant(grant)
             return grant
-        preempting = preempt and self._preempt(grant)
+        if preempt == SUSPEND:
+            if self._lend(grant):
+                return grant
+            preempting = False
+        else:
+            preempting = preempt and self._preempt(grant)
         if not wait and not preempting:
             self._skip(grant)
         return await self._wait(grant)
@@ -148,14 +161,21 @@ class ResourceManager(Generic[OwnerT]):
         if grant._state != HELD:
             return
         grant._state = RELEASED
+        lent = False
         for leaf in grant.leaves:
-            leaf.holds.remove(grant)
+            if leaf.lent:
+                lent = True
+                self._unhold(leaf, grant)
+            elif grant in leaf.holds:  # else a forfeited loan's
+                leaf.holds.remove(grant)
         record = self._owners.get(grant.owner)
         if record is not None:
             record.grants.remove(grant)
             self._sync(grant.owner, record)
         if self._instruments:
             self._emit(EventKind.RESOURCE_RELEASED, grant)
+        if lent:
+            self._give_back(grant.leaves)
         self._flush(grant.leaves)
 
     # -- introspection ----------------------------------------------------
@@ -182,6 +202,19 @@ class ResourceManager(Generic[OwnerT]):
         ordered = sorted(found, key=lambda grant: grant.key)
         return list(dict.fromkeys(grant.owner for grant in ordered))
 
+    def lenders(self, resource: AnyResource) -> list[OwnerT]:
+        """The holders suspended while ``resource`` (any of its leaves) is lent, oldest first.
+
+        A ``preempt="suspend"`` request borrowed it from them; they get it back
+        and resume when it lets go.
+        """
+        found: dict[OwnerT, None] = {}
+        for leaf in check_resource(resource, "the resource to look up").leaves:
+            state = self._leaves.get(leaf.name)
+            if state is not None:
+                found.update(dict.fromkeys(loan.lender for loan in state.lent))
+        return list(found)
+
     def held(self) -> dict[Resource, OwnerT]:
         """Every plain resource held now, and its (innermost) holder."""
         return {s.resource: s.holds[-1].owner for s in self._leaves.values() if s.holds}
@@ -193,6 +226,8 @@ class ResourceManager(Generic[OwnerT]):
     @staticmethod
     def _describe(state: Leaf[OwnerT]) -> str:
         what = f"held by {holder(state.holds[-1].owner)}" if state.holds else "free"
+        if state.lent:
+            what += f" (lent by {', '.join(who(loan.lender) for loan in state.lent)})"
         queued = [who(grant.owner) for grant in state.queue]
         if queued:
             more = f" and {len(queued) - 5} more" if len(queued) > 5 else ""
@@ -202,7 +237,7 @@ class ResourceManager(Generic[OwnerT]):
     # -- requests ---------------------------------------------------------
 
     def _request(
-        self, owner: OwnerT, resources: tuple[AnyResource, ...], options: tuple[bool, int, bool]
+        self, owner: OwnerT, resources: tuple[AnyResource, ...], options: Options
     ) -> Grant[OwnerT]:
         check_options(*options)
         if not resources:
@@ -337,8 +372,11 @@ class ResourceManager(Generic[OwnerT]):
     def _scan(self, leaf: Leaf[OwnerT]) -> None:
         queue = leaf.queue
         head = queue.first()
-        while head is not None and _rules.grantable(head, self._below):
-            self._grant(head)
+        while head is not None:
+            if _rules.grantable(head, self._below):
+                self._grant(head)
+            elif head.preempt != SUSPEND or not self._lend(head):
+                break
             head = queue.first()
         if head is None or not _rules.may_exempt(head, self._below):
             return
@@ -380,6 +418,51 @@ class ResourceManager(Generic[OwnerT]):
                 self._emit(EventKind.RESOURCE_PREEMPTED, hold, **data)
             hold.owner.cancel(reason)
         return True
+
+    # -- lending (preempt="suspend") ---------------------------------------
+
+    def _lend(self, grant: Grant[OwnerT]) -> bool:
+        """Suspend the lower-priority holders in ``grant``'s way and grant it their leaves.
+
+        Returns False (and changes nothing) if it may not (see `_loans.plan`).
+        In recordings the lent holds end (``resource.released``, ``lent_to``)
+        and start again when given back (``resource.acquired``, ``given_back``).
+        """
+        where = _loans.plan(grant)
+        if where is None:
+            return False
+        owner, suspended = grant.owner, set[Owner]()
+        for loan in self._loans.lend(grant, where):
+            lender, name = loan.lender, loan.leaf.resource.name
+            reason = f"suspended by {who(owner)} (priority {grant.priority}) for {name!r}"
+            if self._instruments:
+                data = {"resource": name, "by": owner.id, "reason": reason, "suspended": True}
+                self._emit(EventKind.RESOURCE_PREEMPTED, loan.holds[0], **data)
+                for hold in loan.holds:
+                    self._emit(EventKind.RESOURCE_RELEASED, hold, leaves=[name], lent_to=owner.id)
+            if lender not in suspended:
+                suspended.add(lender)
+                lender._suspend(reason, owner)
+        self._grant(grant)
+        return True
+
+    def _unhold(self, leaf: Leaf[OwnerT], grant: Grant[OwnerT]) -> None:
+        lender = self._loans.unhold(leaf, grant)
+        if lender is not None:
+            lender._unsuspend()
+
+    def _give_back(self, leaves: tuple[Leaf[OwnerT], ...]) -> None:
+        """Give back the loans on ``leaves`` whose borrowers let go; resume their lenders."""
+        for leaf in leaves:
+            if not leaf.lent:
+                continue
+            for loan, restored, lender in self._loans.give_back(leaf):
+                if restored and self._instruments:
+                    back = {"leaves": [leaf.resource.name], "given_back": True}
+                    for hold in loan.holds:
+                        self._emit(EventKind.RESOURCE_ACQUIRED, hold, **back)
+                if lender is not None:
+                    lender._unsuspend()
 
     def _skip(self, grant: Grant[OwnerT], why: _rules.Obstacle[OwnerT] | None = None) -> NoReturn:
         resource, holder, ahead = why if why is not None else _rules.obstacle(grant, self._below)

@@ -95,12 +95,15 @@ def may_exempt(grant: Grant[OwnerT], below: Mapping[Owner, int]) -> bool:
 
 
 def blockers(grant: Grant[OwnerT]) -> list[tuple[Grant[OwnerT], Leaf[OwnerT]]]:
-    """The holds in ``grant``'s way, each with the leaf it blocks."""
+    """The holds in ``grant``'s way, each with the leaf it blocks.
+
+    Holds lent to a ``preempt="suspend"`` request count: they come back first.
+    """
     owner = grant.owner
     return [
         (hold, leaf)
         for leaf in grant.leaves
-        for hold in leaf.holds
+        for hold in (*leaf.holds, *(h for loan in leaf.lent for h in loan.holds))
         if not descends(owner, hold.owner)
     ]
 
