@@ -128,6 +128,7 @@ class Grant(Generic[OwnerT]):
         "_future",
         "_manager",
         "_state",
+        "bypassed",
         "key",
         "leaves",
         "names",
@@ -147,6 +148,7 @@ class Grant(Generic[OwnerT]):
         options: Options,
         *,
         seq: int,
+        rank: float | None = None,
     ) -> None:
         self._manager = manager
         self._state = NEW
@@ -157,7 +159,10 @@ class Grant(Generic[OwnerT]):
         self.leaves = leaves
         self.wait, self.priority = options[0], options[1]
         self.preempt: Preempt = options[2]
-        self.key = (-self.priority, seq)
+        self.key: tuple[float, int] = (-(self.priority if rank is None else rank), seq)
+        """Service order: ``(-rank, arrival number)``; the rank is the priority, aged or not."""
+        self.bypassed = 0
+        """How many later requests were served past it while it waited (see `_rules`)."""
 
     @property
     def waiting(self) -> bool:
@@ -202,11 +207,13 @@ class Loan(Generic[OwnerT]):
 class Leaf(Generic[OwnerT]):
     """The lock state of one plain resource: its holds, its waiting line, its loans."""
 
-    __slots__ = ("holds", "lent", "queue", "resource")
+    __slots__ = ("compounds", "holds", "lent", "queue", "resource")
 
     def __init__(self, resource: Resource) -> None:
         self.resource = resource
         self.holds: list[Grant[OwnerT]] = []
         self.queue: WaitQueue[Grant[OwnerT]] = WaitQueue()
+        self.compounds = 0
+        """How many of the requests in `queue` ask for other leaves too."""
         self.lent: list[Loan[OwnerT]] = []
         """Loans outstanding, oldest first; only the newest can be given back."""

@@ -4,19 +4,27 @@ The manager keeps, for each plain resource it has seen, a `Leaf` (holds and
 waiting line) and applies the rules of `_rules`. A hand-off is served by
 scanning the lines of the leaves whose state changed, from the front, and
 granting every request that can now proceed; a scan stops at the first
-request that cannot, since everything behind it on that leaf yields to it.
+request that cannot and is not held up, since everything behind it on that
+leaf yields to it.
 Only when some descendant of a blocking holder waits (an exemption might
 apply) does a scan go past it. Granted waiters are woken through their own
 future: no thundering herd, no polling, and a hand-off costs the same with
 one waiter or a thousand. Lending to ``preempt="suspend"`` requests is in
-`_loans` (its docstring gives the semantics).
+`_loans` (its docstring gives the semantics). A scan also looks past a
+held-up request (`_rules.held_up`), at most `_rules.LOOKAHEAD` of them, so a
+hand-off stays bounded with a thousand waiters.
+
+The module is longer than most: the lock state and the bookkeeping that
+keeps it consistent (records, counts, events) change together, in one place.
 """
 
 from __future__ import annotations
 
 import asyncio
 import functools
+import itertools
 import logging
+import math
 from typing import TYPE_CHECKING, Generic, NoReturn
 
 from .._core._instrument import EventKind, ExecEvent, Instruments
@@ -66,13 +74,40 @@ def _loop_time() -> float:
     return asyncio.get_running_loop().time()
 
 
+def _check_aging(value: object) -> float | None:
+    """``value`` if it is None or a positive finite number of seconds; else `LockUsageError`."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < math.inf:
+        msg = (
+            f"aging must be a positive number of seconds (waiting worth one priority "
+            f"level) or None, got {value!r}; e.g. aging=5.0"
+        )
+        raise LockUsageError(msg)
+    return float(value)
+
+
 class ResourceManager(Generic[OwnerT]):
     """The lock state of one robot (``robot.resources``): who holds what, who waits.
 
     Args:
         instruments: Where resource events go (waiting, acquired, released,
             preempted, skipped).
-        clock: The time stamp of those events; the running loop's clock by default.
+        clock: The time stamp of those events (and of waits, for aging); the
+            running loop's clock by default.
+        aging: Seconds of waiting worth one priority level (see `aging`);
+            None (the default): strict priority.
+
+    Policy: waiters are served by priority (with ``aging``, the priority
+    raised by the time waited), then first come first served. A request never
+    overtakes an earlier queued request of equal or higher priority that
+    wants one of its resources (DESIGN §4), with one bounded exception
+    against head-of-line blocking: a queued request that a holder holds up
+    (it cannot run now anyway) lets later requests that can run now use its
+    other, idle resources, at most ``_rules.BYPASS_LIMIT`` (16) times; then
+    it keeps its place, so it is never starved. Holders of a lower priority
+    are cancelled (``preempt=True``) or suspended (``preempt="suspend"``)
+    only on request.
 
     Example:
         >>> import asyncio
@@ -92,8 +127,13 @@ class ResourceManager(Generic[OwnerT]):
     """
 
     def __init__(
-        self, instruments: Instruments | None = None, *, clock: Callable[[], float] | None = None
+        self,
+        instruments: Instruments | None = None,
+        *,
+        clock: Callable[[], float] | None = None,
+        aging: float | None = None,
     ) -> None:
+        self._aging = _check_aging(aging)
         self._instruments = instruments if instruments is not None else Instruments()
         self._clock = clock if clock is not None else _loop_time
         self._leaves: dict[str, Leaf[OwnerT]] = {}
@@ -101,10 +141,52 @@ class ResourceManager(Generic[OwnerT]):
         self._below: dict[Owner, int] = {}
         """For every owner, how many queued requests it or its descendants have."""
         self._seq = 0
-        self._work: list[Leaf[OwnerT]] = []
+        self._work: dict[Leaf[OwnerT], None] = {}
+        """Leaves to scan, each once until scanned (an ordered set: newest scanned first)."""
         self._marked: set[Grant[OwnerT]] = set()
         self._flushing = False
         self._loans: _loans.Loans[OwnerT] = _loans.Loans()
+
+    @property
+    def aging(self) -> float | None:
+        """Seconds of waiting worth one priority level, or None for strict priority.
+
+        With aging, a waiting request ranks as its priority plus the seconds it
+        has waited divided by ``aging``: a request of priority 0 that has
+        waited ``10 * aging`` seconds goes before a fresh request of priority
+        10 (strict priority starves it for as long as higher ones keep
+        coming). An earlier request of equal or higher priority always ranks
+        at least as high, so it is never overtaken; a higher priority still
+        wins against a short wait. Off by default: a reflex must outrank a
+        motion however long the motion has waited, unless the program says
+        how long a wait is worth. Set it while nothing waits.
+
+        Example:
+            >>> import asyncio
+            >>> from pyrobots_aio import Robot
+            >>> async def main() -> float | None:
+            ...     async with Robot() as robot:
+            ...         robot.resources.aging = 2.0  # 2 s of waiting = 1 priority level
+            ...         return robot.resources.aging
+            >>> asyncio.run(main())
+            2.0
+
+        Raises:
+            LockUsageError: Not a positive finite number (nor None), or set
+                while requests wait (their places would change).
+        """
+        return self._aging
+
+    @aging.setter
+    def aging(self, value: float | None) -> None:
+        checked = _check_aging(value)
+        if self._below:
+            msg = (
+                f"cannot change aging to {value!r} while {sum(self._below.values())} "
+                "requests wait; set it before they queue (e.g. at the start)"
+            )
+            raise LockUsageError(msg)
+        self._aging = checked
 
     # -- taking and giving back -------------------------------------------
 
@@ -251,7 +333,9 @@ class ResourceManager(Generic[OwnerT]):
             raise LockUsageError(msg)
         leaves = dict.fromkeys(self._leaf(leaf) for r in resources for leaf in r.leaves)
         self._seq += 1
-        return Grant(self, owner, resources, tuple(leaves), options, seq=self._seq)
+        aging = self._aging
+        rank = None if aging is None else options[1] - self._clock() / aging
+        return Grant(self, owner, resources, tuple(leaves), options, seq=self._seq, rank=rank)
 
     def _leaf(self, resource: Resource) -> Leaf[OwnerT]:
         state = self._leaves.get(resource.name)
@@ -271,8 +355,10 @@ class ResourceManager(Generic[OwnerT]):
         owner = grant.owner
         record = self._record(owner)
         record.waiting.append(grant)
+        compound = len(grant.leaves) > 1
         for leaf in grant.leaves:
             leaf.queue.add(grant)
+            leaf.compounds += compound
         self._count_below(owner, 1)
         self._sync(owner, record)
         if self._instruments:
@@ -293,8 +379,10 @@ class ResourceManager(Generic[OwnerT]):
         if grant._state != WAITING:
             return
         grant._state = RELEASED
+        compound = len(grant.leaves) > 1
         for leaf in grant.leaves:
             leaf.queue.discard(grant)
+            leaf.compounds -= compound
         self._count_below(grant.owner, -1)
         record = self._owners.get(grant.owner)
         if record is not None:
@@ -309,10 +397,19 @@ class ResourceManager(Generic[OwnerT]):
         grant._state = HELD
         owner = grant.owner
         record = self._record(owner)
-        for leaf in grant.leaves:
-            if waited:
+        compound = waited and len(grant.leaves) > 1
+        if waited:
+            for leaf in grant.leaves:
                 leaf.queue.discard(grant)
+                leaf.compounds -= compound
+        queued = any(leaf.queue for leaf in grant.leaves)
+        if queued:
+            for other in _rules.bypassed(grant):
+                other.bypassed += 1
+        for leaf in grant.leaves:
             leaf.holds.append(grant)
+        if queued:
+            self._held_up_now(grant)
         if waited:
             record.waiting.remove(grant)
             self._count_below(owner, -1)
@@ -323,6 +420,24 @@ class ResourceManager(Generic[OwnerT]):
         if self._instruments:
             self._emit(EventKind.RESOURCE_ACQUIRED, grant)
         self._flush(grant.leaves)
+
+    def _held_up_now(self, grant: Grant[OwnerT]) -> None:
+        """Look again behind the compound requests that ``grant`` has just held up.
+
+        Before the grant, its leaves were free: a compound request queued on
+        them may just have become held up, so the requests queued behind it
+        on its other leaves may now go.
+        """
+        mine = grant.leaves  # flushed after the grant anyway
+        for leaf in mine:
+            if not leaf.compounds:
+                continue
+            for other in itertools.islice(leaf.queue, _rules.LOOKAHEAD + 1):
+                if len(other.leaves) > 1 and other not in self._marked and _rules.held_up(other):
+                    self._marked.add(other)
+                    self._work.update(
+                        (x, None) for x in other.leaves if not x.holds and x not in mine
+                    )
 
     def _owner_done(self, owner: OwnerT) -> None:
         """Safety net: an owner that is done holds and awaits nothing."""
@@ -357,13 +472,13 @@ class ResourceManager(Generic[OwnerT]):
 
     def _flush(self, leaves: Iterable[Leaf[OwnerT]]) -> None:
         """Serve every request that the change of ``leaves`` lets proceed."""
-        self._work.extend(leaf for leaf in leaves if leaf.queue)
+        self._work.update((leaf, None) for leaf in leaves if leaf.queue)
         if self._flushing:
             return
         self._flushing = True
         try:
             while self._work:
-                self._scan(self._work.pop())
+                self._scan(self._work.popitem()[0])
         finally:
             self._flushing = False
             self._work.clear()
@@ -372,25 +487,39 @@ class ResourceManager(Generic[OwnerT]):
     def _scan(self, leaf: Leaf[OwnerT]) -> None:
         queue = leaf.queue
         head = queue.first()
-        while head is not None:
-            if _rules.grantable(head, self._below):
-                self._grant(head)
-            elif head.preempt != SUSPEND or not self._lend(head):
-                break
+        while head is not None and self._serve(head):
             head = queue.first()
-        if head is None or not _rules.may_exempt(head, self._below):
+        if head is None:
             return
-        for grant in list(queue):  # rare: descendants of a holder wait, look further
+        skip = not leaf.holds and _rules.held_up(head)
+        exempting = _rules.may_exempt(head, self._below)
+        if not skip and not exempting:
+            return
+        passes = _rules.LOOKAHEAD + 1 if skip else 0
+        # Look past a request that others need not wait for: at most LOOKAHEAD
+        # held-up ones, unless descendants of a holder wait (rare: all of them).
+        line = list(queue) if exempting else list(itertools.islice(queue, passes + 1))
+        for grant in line:
             if not grant.waiting:
                 continue
-            if _rules.grantable(grant, self._below):
-                self._grant(grant)
-            elif _rules.may_exempt(grant, self._below):
+            if self._serve(grant):
+                passes = passes if not leaf.holds else 0
+                continue
+            if _rules.may_exempt(grant, self._below):
                 if grant not in self._marked:
                     self._marked.add(grant)
-                    self._work.extend(grant.leaves)
+                    self._work.update(dict.fromkeys(grant.leaves))
+            elif passes and _rules.held_up(grant):
+                passes -= 1
             else:
                 return
+
+    def _serve(self, grant: Grant[OwnerT]) -> bool:
+        """Grant ``grant`` if it may be served now (lending to it if it suspends)."""
+        if _rules.grantable(grant, self._below):
+            self._grant(grant)
+            return True
+        return grant.preempt == SUSPEND and self._lend(grant)
 
     def _preempt(self, grant: Grant[OwnerT]) -> bool:
         """Cancel the holders in ``grant``'s way if all have a lower priority.
