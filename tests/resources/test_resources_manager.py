@@ -37,6 +37,7 @@ class Owner:
         self.held: tuple[str, ...] = ()
         self.awaiting: tuple[str, ...] = ()
         self.reasons: list[str | None] = []
+        self.cancel_requested = False
         self._done = False
         self._callbacks: list[Callable[[], None]] = []
 
@@ -44,6 +45,7 @@ class Owner:
         if self._done:
             return False
         self.reasons.append(reason)
+        self.cancel_requested = True
         return True
 
     def done(self) -> bool:

@@ -253,6 +253,7 @@ def _wrap(locked: _Locked) -> Callable[..., Coroutine[Any, Any, Any]]:
             handle, *resources, wait=wait, priority=priority, preempt=preempt
         )
         if _is_body(handle._fn, take_then_run):  # hold until the action is done
+            grant.until_done = True
             handle.add_finalizer(grant.release)
             return await fn(*args, **kwargs)
         try:  # a locked helper awaited inside some action: hold for the call

@@ -136,6 +136,7 @@ class Grant(Generic[OwnerT]):
         "preempt",
         "priority",
         "resources",
+        "until_done",
         "wait",
     )
 
@@ -161,6 +162,8 @@ class Grant(Generic[OwnerT]):
         self.preempt: Preempt = options[2]
         self.key: tuple[float, int] = (-(self.priority if rank is None else rank), seq)
         """Service order: ``(-rank, arrival number)``; the rank is the priority, aged or not."""
+        self.until_done = False
+        """Held until its owner is done (a ``@lock`` decorator), not for a block or a call."""
         self.bypassed = 0
         """How many later requests were served past it while it waited (see `_rules`)."""
 

@@ -28,8 +28,8 @@ import math
 from typing import TYPE_CHECKING, Generic, NoReturn
 
 from .._core._instrument import EventKind, ExecEvent, Instruments
-from .._exceptions import ActionSkipped, LockUsageError
-from . import _loans, _rules
+from .._exceptions import ActionSkipped, LockUsageError, ResourceDeadlockError
+from . import _cycles, _loans, _rules
 from ._grant import (
     HELD,
     RELEASED,
@@ -42,6 +42,7 @@ from ._grant import (
     OwnerT,
     Preempt,
     check_options,
+    descends,
     holder,
     who,
 )
@@ -219,6 +220,9 @@ class ResourceManager(Generic[OwnerT]):
         Raises:
             ActionSkipped: ``wait`` is False and a resource is busy (or promised
                 to an earlier request); it names the holder or that request.
+            ResourceDeadlockError: Waiting would close a lock cycle (see
+                `_cycles`): a holder in the way waits, directly or not, for
+                what ``owner`` holds. The request is not queued.
             InvalidResourceError: Something given is not a resource.
             LockUsageError: Bad options, no resources, or ``owner`` is done.
         """
@@ -234,6 +238,8 @@ class ResourceManager(Generic[OwnerT]):
             preempting = preempt and self._preempt(grant)
         if not wait and not preempting:
             self._skip(grant)
+        if not preempting:
+            self._refuse_cycle(grant)
         return await self._wait(grant)
 
     def release(self, grant: Grant[OwnerT]) -> None:
@@ -547,6 +553,35 @@ class ResourceManager(Generic[OwnerT]):
                 self._emit(EventKind.RESOURCE_PREEMPTED, hold, **data)
             hold.owner.cancel(reason)
         return True
+
+    # -- lock cycles --------------------------------------------------------
+
+    def _refuse_cycle(self, grant: Grant[OwnerT]) -> None:
+        """Raise `ResourceDeadlockError` if ``grant`` waiting would close a lock cycle."""
+        if not any(_rules.holder_in_way(grant, leaf) is not None for leaf in grant.leaves):
+            return
+        cycle = _cycles.find_cycle(grant, self._waits_of)
+        if cycle is None:
+            return
+        if self._instruments:
+            steps = [[w.id, name, h.id] for w, name, h in cycle]
+            _, busy, holder_in_way = cycle[0]
+            data = {"busy": busy, "holder": holder_in_way.id, "deadlock": steps}
+            self._emit(EventKind.RESOURCE_SKIPPED, grant, **data)
+        raise ResourceDeadlockError(cycle)
+
+    def _waits_of(self, hold: Grant[OwnerT]) -> list[Grant[OwnerT]]:
+        """The waiting requests to serve before ``hold`` can be released."""
+        holder = hold.owner
+        if not self._below.get(holder):
+            return []
+        record = self._owners.get(holder)
+        found = list(record.waiting) if record is not None else []
+        if hold.until_done:  # released once the holder is done: its descendants' waits count
+            for owner, other in self._owners.items():
+                if other.waiting and owner is not holder and descends(owner, holder):
+                    found.extend(other.waiting)
+        return found
 
     # -- lending (preempt="suspend") ---------------------------------------
 

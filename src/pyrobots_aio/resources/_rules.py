@@ -23,8 +23,8 @@ exceptions:
   waits at most that many extra holds and is never starved.
 
 These checks look at the holds directly in the way; hold-and-wait that a
-program builds itself (nested ``async with lock`` in opposite orders) can
-still deadlock, as with any lock.
+program builds itself (nested ``async with lock`` in opposite orders) is
+refused by `_cycles` when the request that would close the cycle is made.
 
 These are pure functions of the lock state; ``below`` maps each owner to the
 number of queued requests of it and its descendants.
