@@ -147,6 +147,7 @@ class ResourceManager(Generic[OwnerT]):
         self._marked: set[Grant[OwnerT]] = set()
         self._flushing = False
         self._loans: _loans.Loans[OwnerT] = _loans.Loans()
+        self._epoch: float | None = None
 
     @property
     def aging(self) -> float | None:
@@ -339,8 +340,12 @@ class ResourceManager(Generic[OwnerT]):
             raise LockUsageError(msg)
         leaves = dict.fromkeys(self._leaf(leaf) for r in resources for leaf in r.leaves)
         self._seq += 1
-        aging = self._aging
-        rank = None if aging is None else options[1] - self._clock() / aging
+        aging, rank = self._aging, None
+        if aging is not None:  # from the first aged request on: small, exact-enough numbers
+            now = self._clock()
+            if self._epoch is None:
+                self._epoch = now
+            rank = options[1] - (now - self._epoch) / aging
         return Grant(self, owner, resources, tuple(leaves), options, seq=self._seq, rank=rank)
 
     def _leaf(self, resource: Resource) -> Leaf[OwnerT]:

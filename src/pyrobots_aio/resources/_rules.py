@@ -101,7 +101,7 @@ BYPASS_LIMIT = 16
 Measured (``python -m tests.bench resources``: 24 actions, 6 resources, random
 compounds, 600 virtual seconds): no passing (DESIGN §4's strict order) kept
 the resources 56 % busy; 16 passes, 73 % (77 % with aging), for a longest
-wait of the lowest priority of 99 s instead of 72 s (30 s instead of 28 s with
+wait of the lowest priority of 99 s instead of 72 s (31 s instead of 28 s with
 aging); unbounded passing, 81 % but 224 s.
 """
 
