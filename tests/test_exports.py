@@ -40,6 +40,7 @@ def test_the_design_names_are_importable_from_the_package() -> None:
         "CompoundResource", "lock", "Pose", "FrameProvider", "InvalidPoseError",
         "UnknownFrameError", "EventMonitor", "StateStore", "ActionInfo", "DriveBase",
         "retry", "exponential", "timeout", "HealthMonitor", "StateMachine",
+        "ResourceDeadlockError",
     }  # fmt: skip
     assert names <= set(pyrobots_aio.__all__)
     assert pyrobots_aio.ActionCancelled is __import__("asyncio").CancelledError

@@ -35,6 +35,7 @@ from ._exceptions import MotionError as MotionError
 from ._exceptions import PoseError as PoseError
 from ._exceptions import PyRobotsError as PyRobotsError
 from ._exceptions import RecordingError as RecordingError
+from ._exceptions import ResourceDeadlockError as ResourceDeadlockError
 from ._exceptions import ResourceError as ResourceError
 from ._exceptions import RobotNotRunningError as RobotNotRunningError
 from ._exceptions import Ros2Error as Ros2Error
@@ -124,6 +125,7 @@ __all__ = [
     "PyRobotsError",
     "RecordingError",
     "Resource",
+    "ResourceDeadlockError",
     "ResourceError",
     "ResourceManager",
     "Robot",

@@ -14,7 +14,8 @@ PyRobotsError
 │   └── ActionDefinitionError     @action applied to something that is not an async def
 ├── ResourceError
 │   ├── InvalidResourceError      not a resource, or a compound that contains itself
-│   └── LockUsageError            lock() misused (outside an action, re-entered, ...)
+│   ├── LockUsageError            lock() misused (outside an action, re-entered, ...)
+│   └── ResourceDeadlockError     a request would close a lock cycle (.cycle)
 ├── StateError
 │   ├── UnknownStateKeyError      also a KeyError and an AttributeError
 │   └── InvalidConditionError     a monitor with no, two, or a mistyped condition
@@ -180,6 +181,34 @@ class InvalidResourceError(ResourceError, TypeError):
 
 class LockUsageError(ResourceError):
     """``lock()`` was misused."""
+
+
+class ResourceDeadlockError(ResourceError):
+    """A request for a resource would close a cycle of actions waiting for each other.
+
+    Nested locks taken in opposite orders (``async with lock(A)`` then
+    ``lock(B)`` in one action, ``B`` then ``A`` in another) would wait for
+    ever: the request that closes the cycle raises this instead of waiting,
+    in the action that made it; the others then go on once it lets go of
+    what it holds. Take the resources in one order everywhere, or together as
+    one `CompoundResource` (taken atomically, it cannot deadlock).
+
+    Attributes:
+        cycle: The steps of the cycle, ``(waiter, resource name, holder)``,
+            starting with the action that raised: each waiter waits for the
+            resource its holder holds, and the last holder is that action
+            (or an ancestor holding until it is done).
+    """
+
+    def __init__(self, cycle: Sequence[tuple[Any, str, Any]]) -> None:
+        self.cycle = tuple(cycle)
+        steps = "; ".join(
+            f"{w.name}#{w.id} waits for {r!r} held by {h.name}#{h.id}" for w, r, h in cycle
+        )
+        super().__init__(
+            f"lock cycle (deadlock): {steps}; take the resources in one order everywhere, "
+            "or together as one CompoundResource"
+        )
 
 
 class StateError(PyRobotsError):

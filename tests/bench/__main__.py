@@ -29,6 +29,8 @@ GOALS: dict[str, tuple[str, Callable[[float], bool]]] = {
     "cancel_all_10000_s": ("<= 0.2 s", lambda v: v <= 0.2),
     "python_work_inside_action_ratio": ("1.0x", lambda v: v <= 1.1),
     "handoff_p99_us": ("p99 <= 500 us", lambda v: v <= 500),
+    "utilisation_pct_compound_contention": (">= 70 % (strict order: ~56 %)", lambda v: v >= 70),
+    "max_wait_lowest_priority_s_aging": ("<= 60 s (strict priority: ~100 s)", lambda v: v <= 60),
     "running_1000_ms": ("<= 1 ms", lambda v: v <= 1),
     "write_to_callback_p99_us": ("p99 <= 500 us", lambda v: v <= 500),
     "pulses_seen_of_30": ("30 of 30", lambda v: v == 30),

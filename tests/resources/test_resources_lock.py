@@ -455,7 +455,9 @@ def test_invalid_options() -> None:
     assert str(info.value) == (
         "priority must be an int, got 'high'; e.g. priority=10 (higher goes first)"
     )
-    with pytest.raises(LockUsageError, match=r"^preempt must be True or False, got 'yes'$"):
+    with pytest.raises(
+        LockUsageError, match=r"^preempt must be True, False or 'suspend', got 'yes'$"
+    ):
         lock(WHEELS, preempt="yes")  # type: ignore[arg-type]
 
 

@@ -15,7 +15,7 @@ from pyrobots_aio import (
     LockUsageError,
 )
 from pyrobots_aio._core._instrument import Instruments
-from pyrobots_aio.resources import CompoundResource, Grant, Resource, ResourceManager
+from pyrobots_aio.resources import CompoundResource, Grant, Resource, ResourceManager, _rules
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -37,6 +37,7 @@ class Owner:
         self.held: tuple[str, ...] = ()
         self.awaiting: tuple[str, ...] = ()
         self.reasons: list[str | None] = []
+        self.cancel_requested = False
         self._done = False
         self._callbacks: list[Callable[[], None]] = []
 
@@ -44,6 +45,7 @@ class Owner:
         if self._done:
             return False
         self.reasons.append(reason)
+        self.cancel_requested = True
         return True
 
     def done(self) -> bool:
@@ -130,6 +132,10 @@ async def test_compound_request_is_not_starved_by_single_requests() -> None:
     x_grant = await manager.acquire(x_holder, X)
     compound_task = start(manager, compound, XY)
     await settle()
+    # Held up by x_holder, the compound request cannot run anyway: single requests
+    # use Y meanwhile instead of leaving it idle, BYPASS_LIMIT of them ...
+    await pass_by(manager, Y)
+    # ... then it keeps its place.
     singles = [Owner(f"y{i}") for i in range(5)]
     y_tasks = [start(manager, o, Y) for o in singles]
     await settle()
@@ -152,6 +158,12 @@ async def test_compound_request_is_not_starved_by_single_requests() -> None:
         assert manager.owner(Y) is owner
         (await task).release()
     assert_idle(manager)
+
+
+async def pass_by(manager: Manager, resource: Resource) -> None:
+    """Pass the held-up requests queued for ``resource`` as often as they may be passed."""
+    for _ in range(_rules.BYPASS_LIMIT):
+        (await manager.acquire(Owner("passer"), resource)).release()
 
 
 @pytest.mark.asyncio
@@ -270,6 +282,7 @@ async def test_child_is_served_once_its_parent_blocks_the_request_ahead() -> Non
     w_grant = await manager.acquire(w_holder, W)
     big_task = start(manager, Owner("big"), W, X, Y)
     await settle()
+    await pass_by(manager, Y)  # then the child yields to it
     child_task = start(manager, child, Y)
     await settle()
     assert manager.waiters(Y) == [manager.waiters(W)[0], child]
@@ -384,6 +397,7 @@ async def test_cancel_while_waiting_leaves_nothing_queued_and_unblocks_those_beh
     compound = Owner("compound")
     compound_task = start(manager, compound, XY)
     await settle()
+    await pass_by(manager, Y)
     single = Owner("single")
     single_task = start(manager, single, Y)
     await settle()

@@ -1,10 +1,15 @@
-"""Many contending actions: no deadlock, mutual exclusion always, nothing leaked."""
+"""Many contending actions: no deadlock, mutual exclusion always, nothing leaked.
+
+The random programs mix waiting, cancelling and suspending (``preempt="suspend"``)
+requests: a lender is frozen while its resource is lent, and any body that
+runs holds what it locked.
+"""
 
 from __future__ import annotations
 
 import asyncio
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -12,7 +17,13 @@ from hypothesis import strategies as st
 
 from pyrobots_aio import ActionHandle, Outcome, Robot, action
 from pyrobots_aio.actions import current_action, lock
-from pyrobots_aio.resources import CompoundResource, Resource, ResourceManager, _rules
+from pyrobots_aio.resources import (
+    CompoundResource,
+    Resource,
+    ResourceManager,
+    _loans,
+    _rules,
+)
 
 A, B, C = Resource("a"), Resource("b"), Resource("c")
 AB, BA = CompoundResource(A, B, name="ab"), CompoundResource(B, A, name="ba")
@@ -31,11 +42,28 @@ class Exclusion:
         assert me is not None
         for leaf in leaves:
             users = self.users.setdefault(leaf, [])
-            assert all(me.childof(user) for user in users), (leaf, users, me)
+            assert all(me.childof(user) or self.idle_user(user, leaf) for user in users), (
+                leaf,
+                users,
+                me,
+            )
             assert self.robot.resources.owner(leaf) is me
             users.append(me)
         self.entries += 1
         return me
+
+    def idle_user(self, user: ActionHandle[Any], leaf: Resource) -> bool:
+        """A user that lent ``leaf`` (preempt="suspend"): frozen, or cancelled and forfeiting."""
+        return user.paused or (user.cancel_requested and not self.holds(user, leaf))
+
+    def holds(self, me: ActionHandle[Any], leaf: Resource) -> bool:
+        owner = self.robot.resources.owner(leaf)
+        return owner is not None and (owner is me or owner.childof(me))
+
+    def check_held(self, me: ActionHandle[Any], leaves: tuple[Resource, ...]) -> None:
+        """A body that runs holds its resources (a lender runs again only once given back)."""
+        for leaf in leaves:
+            assert self.holds(me, leaf), (leaf, me, self.robot.resources)
 
     def leave(self, me: ActionHandle[Any], leaves: tuple[Resource, ...]) -> None:
         for leaf in leaves:
@@ -106,7 +134,7 @@ class Spawn:
     resource: int
     priority: int
     wait: bool
-    preempt: bool
+    preempt: bool | Literal["suspend"]
     ticks: int
     block: bool
     child: bool
@@ -128,7 +156,7 @@ OPS = st.one_of(
         resource=st.integers(0, len(RESOURCES) - 1),
         priority=st.integers(0, 2),
         wait=st.booleans(),
-        preempt=st.booleans(),
+        preempt=st.sampled_from([False, True, "suspend"]),
         ticks=st.integers(0, 3),
         block=st.booleans(),
         child=st.booleans(),
@@ -143,6 +171,7 @@ async def use(ex: Exclusion, leaves: tuple[Resource, ...], spec: Spawn) -> None:
     try:
         for _ in range(spec.ticks):
             await asyncio.sleep(0)
+            ex.check_held(me, leaves)
         if spec.child:  # a child takes part of what its parent holds
             await in_block(ex.robot, ex, leaves[-1])
     finally:
@@ -177,6 +206,10 @@ def check_consistent(manager: ResourceManager[ActionHandle[Any]]) -> None:
         for grant in leaf.queue:
             assert grant.waiting
             assert not _rules.grantable(grant, manager._below), grant
+            assert grant.preempt != "suspend" or _loans.plan(grant) is None, grant
+        for loan in leaf.lent:
+            assert loan.holds
+            assert loan.lender.paused or loan.lender.cancel_requested, loan.lender
 
 
 async def run_program(ops: list[Spawn | Cancel | Tick]) -> None:
@@ -200,6 +233,7 @@ async def run_program(ops: list[Spawn | Cancel | Tick]) -> None:
         assert repr(manager) == "<ResourceManager idle>"
         assert manager._below == {}
         assert manager._owners == {}
+        assert manager._loans.count == {}
     assert all(h.outcome is not Outcome.FAILED for h in handles), [h.exception() for h in handles]
     left = [t for t in asyncio.all_tasks() if t is not asyncio.current_task()]
     assert not left

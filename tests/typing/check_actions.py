@@ -9,9 +9,9 @@ happen.
 
 from __future__ import annotations
 
-from typing import assert_type
+from typing import Any, assert_type
 
-from pyrobots_aio import ActionHandle, Outcome, Robot, action
+from pyrobots_aio import ActionHandle, Outcome, Resource, Robot, action, lock
 
 
 @action
@@ -64,3 +64,20 @@ def wrong_calls_are_type_errors(robot: Robot, pr2: Pr2) -> None:
     Pr2.wave(robot, 3)  # type: ignore[arg-type]
     handle: ActionHandle[str] = double(robot, 21)  # type: ignore[assignment]
     del handle
+
+
+WHEELS = Resource("wheels")
+
+
+@action
+@lock(WHEELS, priority=10, preempt="suspend")
+async def reflex(robot: Robot) -> str:
+    return "backed off"
+
+
+async def locks_take_suspend_and_aging(robot: Robot) -> None:
+    assert_type(reflex(robot), ActionHandle[str])
+    lock(WHEELS, preempt="cancel")  # type: ignore[arg-type]
+    assert_type(robot.resources.aging, float | None)
+    robot.resources.aging = 2.0
+    assert_type(robot.resources.lenders(WHEELS), list[ActionHandle[Any]])

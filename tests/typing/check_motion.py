@@ -29,3 +29,5 @@ async def the_walk_runs_on_any_base(sim: SimRobot, fake: FakeBase) -> None:
     assert_type(await random_walk(fake, moves=3), WalkReport)
     assert_type(inject_bump(fake, "undock", side="left"), Injection)
     inject_bump(fake, "undock", side="top")  # type: ignore[arg-type]
+    assert_type(await random_walk(fake, on_bump="suspend"), WalkReport)
+    await random_walk(fake, on_bump="stop")  # type: ignore[arg-type]

@@ -24,7 +24,15 @@ from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
 from ._handle import ActionHandle, ActionState, Outcome, drive
-from ._pause import freeze, frozen, run_hooks, stop_frozen_clock, thaw
+from ._pause import (
+    freeze,
+    freeze_subtree,
+    frozen,
+    run_hooks,
+    stop_frozen_clock,
+    thaw,
+    thaw_subtree,
+)
 from ._phases import DONE
 
 if TYPE_CHECKING:
@@ -65,7 +73,7 @@ class Executive:
         self._watch_timer: asyncio.TimerHandle | None = None
         self._closing = False
         self.paused = 0
-        """How many actions are paused now (0: nothing is frozen, the fast path)."""
+        """How many actions are paused or suspended now (0: nothing is frozen, the fast path)."""
 
     # -- lifecycle --------------------------------------------------------
 
@@ -304,7 +312,39 @@ class Executive:
         """Pause ``handle``: freeze its subtree, run the pause hooks, record who and why."""
         if not handle._paused:
             self.paused += 1
-        newly = freeze(handle, reason, by)
+        self._froze(handle, freeze(handle, reason, by), reason, by)
+
+    def resume_tree(self, handle: ActionHandle[Any]) -> None:
+        """Resume ``handle``: thaw what is no longer under a pause, run the resume hooks."""
+        if handle._paused:
+            handle._paused = False
+            self.paused -= 1
+        self._thawed(handle, thaw(handle))
+
+    def suspend_tree(
+        self, handle: ActionHandle[Any], reason: str, by: ActionHandle[Any] | None
+    ) -> None:
+        """Suspend ``handle`` (its resource is lent to ``by``): freeze as a pause, apart from it."""
+        if handle._suspended is None:
+            self.paused += 1
+        handle._suspended = reason
+        self._froze(handle, freeze_subtree(handle), reason, by)
+
+    def unsuspend_tree(self, handle: ActionHandle[Any]) -> None:
+        """End ``handle``'s suspension: thaw what is no longer frozen, run the resume hooks."""
+        if handle._suspended is None:
+            return
+        handle._suspended = None
+        self.paused -= 1
+        self._thawed(handle, thaw_subtree(handle))
+
+    def _froze(
+        self,
+        handle: ActionHandle[Any],
+        newly: list[ActionHandle[Any]],
+        reason: str | None,
+        by: ActionHandle[Any] | None,
+    ) -> None:
         if self.instruments.items:
             for node in newly:
                 self._emit(
@@ -316,19 +356,19 @@ class Executive:
                 )
         run_hooks(newly, 0, "pause")
 
-    def resume_tree(self, handle: ActionHandle[Any]) -> None:
-        """Resume ``handle``: thaw what is no longer under a pause, run the resume hooks."""
-        self.unpause(handle)
-        thawed = thaw(handle)
+    def _thawed(self, handle: ActionHandle[Any], thawed: list[ActionHandle[Any]]) -> None:
         if self.instruments.items:
             for node in thawed:
                 self._emit(EventKind.ACTION_RESUMED, node, resumed=handle.id)
         run_hooks(thawed, 1, "resume")
 
     def unpause(self, handle: ActionHandle[Any]) -> None:
-        """Count ``handle`` as no longer paused (resumed, or done while paused)."""
+        """Count ``handle`` as neither paused nor suspended any more (it is done)."""
         if handle._paused:
             handle._paused = False
+            self.paused -= 1
+        if handle._suspended is not None:
+            handle._suspended = None
             self.paused -= 1
 
     def pause_all(self, reason: str | None) -> None:

@@ -58,7 +58,10 @@ class ActionState(enum.Enum):
     CANCELLING = "cancelling"
     """Cancellation requested; its cleanup is running."""
     PAUSED = "paused"
-    """Frozen where it stands: it or an ancestor was paused (`ActionHandle.pause`)."""
+    """Frozen where it stands: it or an ancestor was paused (`ActionHandle.pause`).
+
+    Or suspended: a ``@lock(..., preempt="suspend")`` request borrows its resource.
+    """
     FINISHING = "finishing"
     """Its body has ended; its children are being cancelled and awaited."""
     DONE = "done"
@@ -111,6 +114,7 @@ class ActionHandle(Generic[T]):
         "_paused",
         "_paused_by",
         "_phase",
+        "_suspended",
         "_task",
         "_thaw",
         "_unretrieved",
@@ -163,6 +167,8 @@ class ActionHandle(Generic[T]):
         self._paused = False
         self._pause_reason: str | None = None
         self._paused_by: ActionHandle[Any] | None = None
+        self._suspended: str | None = None
+        """The reason of the suspension that lends its resources to a preemptor, if any."""
         self._frozen_since: float | None = None
         self._frozen_total = 0.0
         self._thaw: asyncio.Future[None] | None = None
@@ -391,14 +397,33 @@ class ActionHandle(Generic[T]):
 
     @property
     def pause_reason(self) -> str | None:
-        """The reason given to `pause` on this action, while it is paused."""
-        return self._pause_reason
+        """The reason given to `pause` on this action, while it is paused.
+
+        While it is not paused but suspended (a ``@lock(..., preempt="suspend")``
+        request borrows its resource), the suspension's reason, which names the
+        preemptor.
+        """
+        return self._pause_reason if self._paused else self._suspended
 
     def frozen_time(self) -> float:
         """Seconds (on the robot's clock) this action has spent frozen so far."""
         return frozen_time(self)
 
     # -- executive side ---------------------------------------------------
+
+    def _suspend(self, reason: str, by: object) -> None:
+        """Freeze this subtree while a preemptor borrows its resource (the resources layer's call).
+
+        Apart from any pause: `resume` does not end it, `_unsuspend` does.
+        """
+        if self._phase != DONE:
+            borrower = by if isinstance(by, ActionHandle) else None
+            self._executive.suspend_tree(self, reason, borrower)
+
+    def _unsuspend(self) -> None:
+        """End the suspension: thaw what is no longer paused, run the resume hooks."""
+        if self._phase != DONE:
+            self._executive.unsuspend_tree(self)
 
     def add_finalizer(self, finalizer: Callable[[], None]) -> None:
         """Run ``finalizer()`` when the action ends, after its children, before it is done.
@@ -511,7 +536,7 @@ class ActionHandle(Generic[T]):
             return
         if release and self._finalizers is not None:
             self._run_finalizers()
-        if self._paused:
+        if self._paused or self._suspended is not None:
             self._executive.unpause(self)
         self._phase = DONE
         self._coro = None

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar, overload
 
 from .._exceptions import InvalidResourceError, LockUsageError
 from ..resources import ResourceManager
-from ..resources._grant import check_options
+from ..resources._grant import Options, Preempt, check_options
 from ..resources._resource import check_resource
 from ._context import current_action
 from ._decorator import Action
@@ -37,7 +37,7 @@ P = ParamSpec("P")
 T = TypeVar("T")
 R = TypeVar("R")
 
-_Options = tuple[bool, int, bool]
+_Options = Options
 _MARK = "__pyrobots_lock__"
 
 
@@ -59,12 +59,12 @@ class Lock:
 
     __slots__ = ("_grants", "preempt", "priority", "resource", "wait")
 
-    def __init__(self, resource: AnyResource, wait: bool, priority: int, preempt: bool) -> None:
+    def __init__(self, resource: AnyResource, wait: bool, priority: int, preempt: Preempt) -> None:
         self.resource = check_resource(resource, "the resource to lock")
         check_options(wait, priority, preempt)
         self.wait = wait
         self.priority = priority
-        self.preempt = preempt
+        self.preempt: Preempt = preempt
         self._grants: dict[ActionHandle[Any], list[Grant[ActionHandle[Any]]]] = {}
 
     @property
@@ -149,12 +149,12 @@ class Lock:
     def __repr__(self) -> str:
         return (
             f"lock({self.resource!r}, wait={self.wait}, priority={self.priority}, "
-            f"preempt={self.preempt})"
+            f"preempt={self.preempt!r})"
         )
 
 
 def lock(
-    resource: AnyResource, wait: bool = True, priority: int = 0, preempt: bool = False
+    resource: AnyResource, wait: bool = True, priority: int = 0, preempt: Preempt = False
 ) -> Lock:
     """Take ``resource`` for an action: a decorator, or an async context manager.
 
@@ -174,6 +174,12 @@ def lock(
             queued request of equal or higher priority. With ``wait=False`` it
             still waits for that cleanup, but is skipped without cancelling
             anyone if an earlier queued request would be served first.
+            ``preempt="suspend"``: suspend them instead of cancelling them
+            (their subtrees freeze as if paused, their pause hooks park their
+            actuators) and take the resource at once; when this action lets
+            go of it, they get it back before anyone waiting and resume where
+            they stood (a motion goes on with its remaining distance). With
+            ``wait=False`` it is skipped if it cannot suspend at once.
 
     Note:
         A decorator between ``@action`` and ``@lock`` must keep ``__wrapped__``
@@ -247,6 +253,7 @@ def _wrap(locked: _Locked) -> Callable[..., Coroutine[Any, Any, Any]]:
             handle, *resources, wait=wait, priority=priority, preempt=preempt
         )
         if _is_body(handle._fn, take_then_run):  # hold until the action is done
+            grant.until_done = True
             handle.add_finalizer(grant.release)
             return await fn(*args, **kwargs)
         try:  # a locked helper awaited inside some action: hold for the call

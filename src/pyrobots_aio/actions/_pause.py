@@ -33,7 +33,11 @@ T = TypeVar("T")
 
 
 def frozen(handle: ActionHandle[Any]) -> bool:
-    """Whether ``handle`` is paused, or under a paused ancestor, and not being cancelled.
+    """Whether ``handle`` is paused or suspended, or under such an ancestor, and not cancelled.
+
+    A suspension (``@lock(..., preempt="suspend")`` lending the holder's
+    resource to a preemptor) freezes as a pause does, apart from any pause:
+    ``resume()`` lifts the pause only, and the end of the loan the suspension.
 
     The walk up stops at a cancelled action: cancellation reaches a paused
     action at once, and its cleanup (the actions it starts then) runs unfrozen.
@@ -42,7 +46,7 @@ def frozen(handle: ActionHandle[Any]) -> bool:
     while node is not None:
         if node._cancel_requested:
             return False
-        if node._paused:
+        if node._paused or node._suspended is not None:
             return True
         node = node.parent
     return False
@@ -126,6 +130,11 @@ def freeze(
     handle._paused = True
     handle._pause_reason = reason
     handle._paused_by = by
+    return freeze_subtree(handle)
+
+
+def freeze_subtree(handle: ActionHandle[Any]) -> list[ActionHandle[Any]]:
+    """Start the frozen clock of ``handle``'s subtree; return what froze now (deepest first)."""
     now = handle._loop.time()
     newly = []
     for node in subtree(handle):
@@ -140,6 +149,11 @@ def thaw(handle: ActionHandle[Any]) -> list[ActionHandle[Any]]:
     """Resume ``handle`` (counted unpaused already); return what thawed, parents first."""
     handle._pause_reason = None
     handle._paused_by = None
+    return thaw_subtree(handle)
+
+
+def thaw_subtree(handle: ActionHandle[Any]) -> list[ActionHandle[Any]]:
+    """Wake what in ``handle``'s subtree is no longer frozen; return it, parents first."""
     thawed = []
     for node in subtree(handle):
         if node._frozen_since is not None and not frozen(node):

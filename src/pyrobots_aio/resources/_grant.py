@@ -4,12 +4,13 @@ Each leaf keeps a *stack* of holds, outermost first; every hold's owner is
 (or descends from) the owner of the hold below it, because ownership is
 inherited: a leaf is free to an owner when nobody holds it or its innermost
 holder is that owner or one of its ancestors. Each leaf also keeps a
-`WaitQueue` of the requests waiting for it, in service order.
+`WaitQueue` of the requests waiting for it, in service order, and a stack of
+`Loan`: the holds set aside while a ``preempt="suspend"`` request borrows it.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, Literal, Protocol, TypeAlias, TypeVar
 
 from .._exceptions import LockUsageError
 from ._queue import WaitQueue
@@ -23,6 +24,13 @@ if TYPE_CHECKING:
 
 NEW, WAITING, HELD, RELEASED = range(4)
 _STATES = ("new", "waiting", "held", "released")
+
+SUSPEND = "suspend"
+"""``preempt=SUSPEND``: pause the holders in the way and borrow their resource."""
+Preempt: TypeAlias = bool | Literal["suspend"]
+"""How a request treats lower-priority holders: wait (False), cancel (True), or suspend."""
+Options: TypeAlias = tuple[bool, int, Preempt]
+"""``(wait, priority, preempt)`` of a request."""
 
 
 class Owner(Protocol):
@@ -45,8 +53,18 @@ class Owner(Protocol):
     def parent(self) -> Owner | None:
         """The owner it descends from; a descendant may take what an ancestor holds."""
 
+    @property
+    def cancel_requested(self) -> bool:
+        """Whether its cancellation was requested (it is then never suspended)."""
+
     def cancel(self, reason: str | None = None) -> bool:
         """Request its cancellation (preemption); return False if it is done."""
+
+    def _suspend(self, reason: str, by: Any) -> None:
+        """Freeze it and its subtree, apart from any pause, while ``by`` borrows its resource."""
+
+    def _unsuspend(self) -> None:
+        """End the suspension: it thaws unless it is paused as well."""
 
     def done(self) -> bool:
         """Whether it is over; its resources are then released."""
@@ -59,14 +77,19 @@ OwnerT = TypeVar("OwnerT", bound=Owner)
 
 
 def check_options(wait: object, priority: object, preempt: object) -> None:
-    """Raise `LockUsageError` unless ``wait``/``preempt`` are bools and ``priority`` an int."""
+    """Raise `LockUsageError` unless ``wait`` is a bool, ``priority`` an int, ``preempt`` valid.
+
+    ``preempt`` is True, False or ``"suspend"``.
+    """
     if isinstance(priority, bool) or not isinstance(priority, int):
         msg = f"priority must be an int, got {priority!r}; e.g. priority=10 (higher goes first)"
         raise LockUsageError(msg)
-    for option, value in (("wait", wait), ("preempt", preempt)):
-        if not isinstance(value, bool):
-            msg = f"{option} must be True or False, got {value!r}"
-            raise LockUsageError(msg)
+    if not isinstance(wait, bool):
+        msg = f"wait must be True or False, got {wait!r}"
+        raise LockUsageError(msg)
+    if not isinstance(preempt, bool) and preempt != SUSPEND:
+        msg = f"preempt must be True, False or {SUSPEND!r}, got {preempt!r}"
+        raise LockUsageError(msg)
 
 
 def descends(node: Owner | None, ancestor: Owner) -> bool:
@@ -105,6 +128,7 @@ class Grant(Generic[OwnerT]):
         "_future",
         "_manager",
         "_state",
+        "bypassed",
         "key",
         "leaves",
         "names",
@@ -112,6 +136,7 @@ class Grant(Generic[OwnerT]):
         "preempt",
         "priority",
         "resources",
+        "until_done",
         "wait",
     )
 
@@ -121,9 +146,10 @@ class Grant(Generic[OwnerT]):
         owner: OwnerT,
         resources: tuple[AnyResource, ...],
         leaves: tuple[Leaf[OwnerT], ...],
-        options: tuple[bool, int, bool],
+        options: Options,
         *,
         seq: int,
+        rank: float | None = None,
     ) -> None:
         self._manager = manager
         self._state = NEW
@@ -132,8 +158,14 @@ class Grant(Generic[OwnerT]):
         self.resources = resources
         self.names = tuple(dict.fromkeys(r.name for r in resources))
         self.leaves = leaves
-        self.wait, self.priority, self.preempt = options
-        self.key = (-self.priority, seq)
+        self.wait, self.priority = options[0], options[1]
+        self.preempt: Preempt = options[2]
+        self.key: tuple[float, int] = (-(self.priority if rank is None else rank), seq)
+        """Service order: ``(-rank, arrival number)``; the rank is the priority, aged or not."""
+        self.until_done = False
+        """Held until its owner is done (a ``@lock`` decorator), not for a block or a call."""
+        self.bypassed = 0
+        """How many later requests were served past it while it waited (see `_rules`)."""
 
     @property
     def waiting(self) -> bool:
@@ -155,12 +187,36 @@ class Grant(Generic[OwnerT]):
         return f"<Grant {names} {state} by {who(self.owner)} priority={self.priority}>"
 
 
-class Leaf(Generic[OwnerT]):
-    """The lock state of one plain resource: its stack of holds and its waiting line."""
+class Loan(Generic[OwnerT]):
+    """Holds set aside on one leaf while a ``preempt="suspend"`` request borrows it.
 
-    __slots__ = ("holds", "queue", "resource")
+    ``holds`` were the top of the leaf's stack, from the outermost holder in
+    the borrower's way (the `lender`, suspended with its subtree) up; they go
+    back on the stack once the borrower's lineage holds the leaf no more.
+    """
+
+    __slots__ = ("borrower", "holds", "leaf", "lender")
+
+    def __init__(
+        self, leaf: Leaf[OwnerT], holds: list[Grant[OwnerT]], borrower: Grant[OwnerT]
+    ) -> None:
+        self.leaf = leaf
+        self.holds = holds
+        self.borrower = borrower
+        self.lender: OwnerT = holds[0].owner
+        """The suspended holder: the owner of the outermost hold lent."""
+
+
+class Leaf(Generic[OwnerT]):
+    """The lock state of one plain resource: its holds, its waiting line, its loans."""
+
+    __slots__ = ("compounds", "holds", "lent", "queue", "resource")
 
     def __init__(self, resource: Resource) -> None:
         self.resource = resource
         self.holds: list[Grant[OwnerT]] = []
         self.queue: WaitQueue[Grant[OwnerT]] = WaitQueue()
+        self.compounds = 0
+        """How many of the requests in `queue` ask for other leaves too."""
+        self.lent: list[Loan[OwnerT]] = []
+        """Loans outstanding, oldest first; only the newest can be given back."""

@@ -1,6 +1,8 @@
 """The waiting line of one plain resource: requests in service order.
 
-Service order is priority first (higher first), then first come first served;
+Service order is rank first (higher first: the priority, or with aging the
+priority raised by the time waited, see `ResourceManager.aging`), then first
+come first served;
 a preempting request gets no place ahead of earlier requests of its priority
 (DESIGN §4: nobody overtakes an earlier request of equal or higher priority).
 Requests of one priority band sit in a deque in arrival order; a request that
@@ -23,8 +25,8 @@ class Queued(Protocol):
     """What the queue needs of a request."""
 
     @property
-    def key(self) -> tuple[int, int]:
-        """Sort key: ``(-priority, arrival number)``."""
+    def key(self) -> tuple[float, int]:
+        """Sort key: ``(-rank, arrival number)``; the rank is the priority, aged or not."""
 
     @property
     def waiting(self) -> bool:
@@ -48,8 +50,8 @@ class WaitQueue(Generic[Q]):
     __slots__ = ("_bands", "_order")
 
     def __init__(self) -> None:
-        self._bands: dict[int, _Band[Q]] = {}
-        self._order: list[int] = []
+        self._bands: dict[float, _Band[Q]] = {}
+        self._order: list[float] = []
 
     def add(self, request: Q) -> None:
         """Queue ``request`` (it must be waiting) behind the others of its band."""

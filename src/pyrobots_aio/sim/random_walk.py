@@ -11,6 +11,12 @@ does wherever the bump comes: while undocking, in the first drive, while
 docking (the tests press the bumper at each action boundary of a walk with
 `pyrobots_aio.testing.inject_bump`).
 
+With ``random_walk(robot, on_bump="suspend")`` the reflex is
+`suspending_reflex`, which locks with ``preempt="suspend"`` instead: the
+current motion is frozen where it stands (its pause hook parks the wheels),
+the reflex borrows the wheels, and the motion resumes with its remaining
+distance or angle once the reflex is done; no move is interrupted.
+
 It is written against `pyrobots_aio.motion.DriveBase` alone, so it runs
 unchanged on the simulated robot, a ROS 2 robot and the in-memory
 `pyrobots_aio.testing.FakeBase`; importing it needs no MuJoCo. Run it with
@@ -23,6 +29,7 @@ import logging
 import math
 import random
 from dataclasses import dataclass
+from typing import Literal
 
 from .._exceptions import ActionInterrupted
 from ..actions import action, lock
@@ -49,7 +56,7 @@ class WalkReport:
     Attributes:
         moves: Turn-and-drive moves attempted.
         bumps: Bumper presses the reflex handled.
-        interrupted: Moves the reflex preempted.
+        interrupted: Moves the reflex cancelled (none with ``on_bump="suspend"``).
         docked: Whether the robot ended on its dock.
         sim_time: Simulated seconds the walk took.
     """
@@ -67,7 +74,23 @@ async def bumper_reflex(robot: DriveBase) -> None:
     """Back off, then turn away from the side that was hit (both sides: turn round).
 
     On the dock it only turns: the dock is behind (backing into it stalls the wheels).
+    It cancels the motion it preempts.
     """
+    await _back_off_and_turn(robot)
+
+
+@action
+@lock(WHEELS, priority=REFLEX_PRIORITY, preempt="suspend")
+async def suspending_reflex(robot: DriveBase) -> None:
+    """The `bumper_reflex` that suspends the motion it preempts instead of cancelling it.
+
+    The motion freezes (its wheels parked), and goes on where it stood once
+    this reflex has released the wheels.
+    """
+    await _back_off_and_turn(robot)
+
+
+async def _back_off_and_turn(robot: DriveBase) -> None:
     left, right = robot.state.bumper_left, robot.state.bumper_right
     turn = -0.9 if left and not right else 0.9 if right and not left else 0.75 * math.pi
     if robot.state.docked:
@@ -94,7 +117,12 @@ async def move(robot: DriveBase, angle: float, distance: float) -> bool:
 
 
 async def random_walk(
-    robot: DriveBase, *, moves: int = 10, duration: float | None = None, seed: int = 0
+    robot: DriveBase,
+    *,
+    moves: int = 10,
+    duration: float | None = None,
+    seed: int = 0,
+    on_bump: Literal["cancel", "suspend"] = "cancel",
 ) -> WalkReport:
     """Undock, drive out, make random moves, dock; a bumper reflex handles collisions.
 
@@ -104,10 +132,21 @@ async def random_walk(
         duration: If given, keep making moves until this many simulated seconds
             have passed since the start (at least ``moves`` moves are made first).
         seed: Seeds the choice of moves.
+        on_bump: What the reflex does to the motion it preempts: ``"cancel"``
+            it (`bumper_reflex`; the move is counted as interrupted) or
+            ``"suspend"`` it (`suspending_reflex`; the motion resumes after
+            the reflex, with its remaining distance).
+
+    Raises:
+        ValueError: ``on_bump`` is neither ``"cancel"`` nor ``"suspend"``.
     """
+    reflexes = {"cancel": bumper_reflex, "suspend": suspending_reflex}
+    if on_bump not in reflexes:
+        msg = f"on_bump must be 'cancel' or 'suspend', got {on_bump!r}"
+        raise ValueError(msg)
     rng = random.Random(seed)
     start = robot.time()
-    reflex = robot.whenever("bumper", becomes=True).do(bumper_reflex)
+    reflex = robot.whenever("bumper", becomes=True).do(reflexes[on_bump])
     done = interrupted = 0
     try:
         await _leave_dock(robot)
@@ -166,6 +205,7 @@ async def _detour(robot: DriveBase) -> None:
 
 async def _reflexes_done(robot: DriveBase) -> None:
     """Wait until every bumper reflex started so far is done (at once if there is none)."""
+    names = {bumper_reflex.name, suspending_reflex.name}
     for handle in robot.handles():
-        if handle.name == bumper_reflex.name:
+        if handle.name in names:
             await handle.wait_done()
