@@ -95,6 +95,9 @@ async def test_driving_into_a_wall_presses_the_bumper_and_lowers_ir(base: Base) 
             readings.append(robot.state.ir_front_center_left)
             assert robot.time() < 30, "never reached the east wall"
         robot.stop()
+        # One tick more: over ROS 2 each bumper is a topic of its own, and the three
+        # messages of one tick may land in separate loop iterations.
+        await robot.sleep(robot.control_period)
         assert robot.state.bumper_left
         assert robot.state.bumper_right
         seen = [r for r in readings if r < 0.4]
