@@ -21,7 +21,7 @@ from geometry_msgs.msg import Twist  # noqa: E402
 from rclpy.impl.implementation_singleton import rclpy_implementation  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
 
-from pyrobots_aio import Robot  # noqa: E402
+from pyrobots_aio import HealthMonitor, Robot  # noqa: E402
 from pyrobots_aio.ros2 import attach_ros2  # noqa: E402
 
 if TYPE_CHECKING:
@@ -149,3 +149,41 @@ async def test_diagnostics_report_stale_then_fresh_state(plain: Callable[..., Pl
             await next_where(inbox, lambda a: ours(a) and a.status[0].level == b"\x00")
         ).status[0]
         assert fresh.message == "1 state keys fresh"
+
+
+@pytest.mark.asyncio
+async def test_diagnostics_publish_the_health_monitor_and_the_emergency_stop(
+    plain: Callable[..., PlainNode],
+) -> None:
+    monitor = plain("robot_monitor")
+    inbox = monitor.inbox("/diagnostics", DiagnosticArray)
+    robot = Robot()
+    ros2 = attach_ros2(robot, "executive", diagnostics_period=0.1)
+    health = HealthMonitor(robot)
+    health.watch("battery", check=lambda level: "warn" if level < 0.2 else "ok")
+    health.subsystem("camera")
+    ros2.publish_health(health)
+
+    def statuses(array: Any) -> dict[str, Any]:
+        return {status.name: status for status in array.status}
+
+    async with robot, asyncio.timeout(DEADLINE):
+        health.start()
+        robot.state.battery = 0.1
+        health.beat("camera", "error", "no frames")
+        seen = statuses(await next_where(inbox, lambda a: "/executive: battery" in statuses(a)))
+        battery, camera = seen["/executive: battery"], seen["/executive: camera"]
+        assert (battery.level, camera.level, camera.message) == (b"\x01", b"\x02", "no frames")
+        assert ("state key", "battery") in [(v.key, v.value) for v in battery.values]
+        assert "/executive: emergency stop" not in seen
+        robot.emergency_stop("cliff")
+        latched = statuses(
+            await next_where(inbox, lambda a: "/executive: emergency stop" in statuses(a))
+        )["/executive: emergency stop"]
+        assert (latched.level, latched.message) == (b"\x02", "latched: cliff")
+
+
+def test_health_needs_diagnostics() -> None:
+    ros2 = attach_ros2(Robot(), "executive", diagnostics_period=None)
+    with pytest.raises(ValueError, match=r"publishes no /diagnostics \(diagnostics_period=None\)"):
+        ros2.publish_health(HealthMonitor(Robot()))

@@ -6,6 +6,11 @@ the node, ``STALE`` while a watched key is older than ``stale_after`` (or
 was never written), ``OK`` otherwise, with each key's age as a value. The
 watched keys are those the node's subscriptions write, plus any given. It is
 published every ``period`` seconds of the robot's clock.
+
+Beside it: an ``ERROR`` status ``"<node>: emergency stop"`` while the robot's
+emergency stop is latched, and one status per thing each `HealthMonitor`
+given to ``robot.ros2.publish_health(monitor)`` watches (its level, message
+and last heartbeat), named ``"<node>: <name>"``.
 """
 
 from __future__ import annotations
@@ -19,8 +24,9 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable
 
     from ..robot import Robot
+    from ..supervision import HealthMonitor
 
-OK, STALE = 0, 3  # diagnostic_msgs/DiagnosticStatus levels (bytes on the wire)
+OK, ERROR, STALE = 0, 2, 3  # diagnostic_msgs/DiagnosticStatus levels (bytes on the wire)
 
 
 def staleness(
@@ -63,12 +69,14 @@ class Diagnostics:
         period: float,
         stale_after: float,
         keys: Callable[[], Iterable[str]],
+        monitors: list[HealthMonitor],
     ) -> None:
         msgs = rclpy_module("diagnostic_msgs.msg")
         self._msgs = msgs
         self._node, self._robot = node, robot
         self._period, self._stale_after, self._keys = period, stale_after, keys
         self._pub = node.create_publisher(msgs.DiagnosticArray, "/diagnostics", 10)
+        self._monitors = monitors  # the node's list: monitors given later are published too
         self._timer: asyncio.TimerHandle | None = None
         self._next = 0.0
 
@@ -85,19 +93,35 @@ class Diagnostics:
 
     def message(self) -> Any:
         """The ``DiagnosticArray`` describing the robot now."""
-        msgs = self._msgs
         level, text, values = staleness(self._robot, self._keys(), self._stale_after)
-        name = self._node.get_fully_qualified_name()
-        status = msgs.DiagnosticStatus(
+        statuses = [self._status(level, "state", text, values)]
+        reason = self._robot.emergency_stop_reason
+        if reason is not None:
+            statuses.append(self._status(ERROR, "emergency stop", f"latched: {reason}", []))
+        now = self._robot.time()
+        for monitor in self._monitors:
+            for health in monitor.statuses().values():
+                last = health.last_seen
+                seen = "never" if last is None else f"{now - last:.3f} s ago"
+                facts = [("level", health.level.value), ("last heartbeat", seen)]
+                if health.key is not None:
+                    facts.append(("state key", health.key))
+                statuses.append(
+                    self._status(health.level.diagnostic, health.name, health.message, facts)
+                )
+        array = self._msgs.DiagnosticArray(status=statuses)
+        array.header.stamp = self._node.get_clock().now().to_msg()
+        return array
+
+    def _status(self, level: int, what: str, text: str, values: list[tuple[str, str]]) -> Any:
+        msgs, name = self._msgs, self._node.get_fully_qualified_name()
+        return msgs.DiagnosticStatus(
             level=bytes([level]),
-            name=f"{name}: state",
+            name=f"{name}: {what}",
             message=text,
             hardware_id=name,
             values=[msgs.KeyValue(key=key, value=value) for key, value in values],
         )
-        array = msgs.DiagnosticArray(status=[status])
-        array.header.stamp = self._node.get_clock().now().to_msg()
-        return array
 
     def _tick(self) -> None:
         self._pub.publish(self.message())

@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Mapping
 
     from ..robot import Backend, Robot
+    from ..supervision import HealthMonitor
 
 _log = logging.getLogger("pyrobots_aio.ros2")
 
@@ -125,6 +126,7 @@ class Ros2Node:
         self._publishers: list[Ros2Publisher[Any]] = []
         self._clients: dict[tuple[str, type], Any] = {}
         self._diagnostics: Diagnostics | None = None
+        self._health: list[HealthMonitor] = []
 
     # -- facts --------------------------------------------------------------------
 
@@ -173,6 +175,7 @@ class Ros2Node:
                 period=self._diagnostics_period,
                 stale_after=self._stale_after,
                 keys=self._watched_keys,
+                monitors=self._health,
             )
             self._diagnostics.start()
         _log.info("ROS 2 node %s up (domain %d)", self.full_name, self.domain_id)
@@ -193,6 +196,24 @@ class Ros2Node:
         await self._thread.stop()
 
     # -- topics -------------------------------------------------------------------
+
+    def publish_health(self, monitor: HealthMonitor) -> None:
+        """Publish ``monitor``'s statuses on ``/diagnostics`` too, one per thing it watches.
+
+        Each is a ``DiagnosticStatus`` named ``"<node>: <name>"`` at its level (OK, WARN,
+        ERROR, STALE), with its message and last heartbeat; from the next publication on.
+
+        Raises:
+            ValueError: The node publishes no diagnostics (``diagnostics_period=None``).
+        """
+        if self._diagnostics_period is None:
+            msg = (
+                f"{self!r} publishes no /diagnostics (diagnostics_period=None); "
+                "give attach_ros2(..., diagnostics_period=1.0) to publish health"
+            )
+            raise ValueError(msg)
+        if monitor not in self._health:
+            self._health.append(monitor)
 
     def subscribe(
         self,
