@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from pyrobots_aio.motion import MAX_DISTANCE, MAX_TURN  # noqa
+from pyrobots_aio.motion import MAX_DISTANCE, MAX_TURN
 
 if TYPE_CHECKING:
     from .conftest import Base
@@ -24,11 +24,15 @@ async def test_an_int_too_large_for_a_float_is_a_value_error_naming_it(base: Bas
             robot.drive(HUGE, 0.0)
         with pytest.raises(ValueError, match=rf"^w must be a finite number, got -{TOO_LARGE}$"):
             robot.drive(0.0, -HUGE)
-        with pytest.raises(ValueError, match=rf"^distance must be .*, got {TOO_LARGE}$"):
+        with pytest.raises(
+            ValueError, match=rf"^distance must be .*, got {TOO_LARGE}; drive_distance takes metres"
+        ):
             await robot.drive_distance(HUGE)
         with pytest.raises(ValueError, match=rf"^speed must be .*, got {TOO_LARGE}$"):
             await robot.drive_distance(0.1, speed=HUGE)
-        with pytest.raises(ValueError, match=rf"^angle must be .*, got {TOO_LARGE}$"):
+        with pytest.raises(
+            ValueError, match=rf"^angle must be .*, got {TOO_LARGE}; rotate_angle turns by radians"
+        ):
             await robot.rotate_angle(HUGE)
         with pytest.raises(ValueError, match=TOO_LARGE):
             await robot.navigate_to((HUGE, 0.0, 0.0, "map"))
@@ -49,8 +53,8 @@ async def test_a_huge_finite_speed_is_limited_to_the_top_speed_and_reported(base
         assert all(math.isfinite(value) for value in base.truth(robot))
         robot.drive(-1.7e308, -1.7e308)  # the curvature is kept: a tight reverse turn
         v, w = robot.world.command
-        assert v < 0 and w < 0
-        assert math.isfinite(v) and math.isfinite(w)
+        assert all(math.isfinite(speed) for speed in (v, w))
+        assert v < 0
         assert v == pytest.approx(w)
         robot.stop()
         assert robot.world.command == (0.0, 0.0)
@@ -71,7 +75,7 @@ async def test_a_turn_or_a_distance_beyond_any_robot_run_is_refused(base: Base) 
         ):
             await robot.navigate_to((1e300, 0.0, 0.0, "map"))
         assert robot.state.docked
-    assert MAX_TURN == pytest.approx(2000 * math.pi)
+    assert pytest.approx(2000 * math.pi) == MAX_TURN
     assert MAX_DISTANCE == 100_000.0
 
 

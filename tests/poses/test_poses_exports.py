@@ -52,8 +52,7 @@ def test_poses_imports_only_stdlib_numpy_transforms3d_exceptions_and_numbers() -
             top = name.split(".")[0]
             allowed = (
                 (name.startswith(".") and not name.startswith(".."))
-                or name == ".._exceptions"
-                or name == ".._core._numbers"  # the one number check (stdlib only)
+                or name in {".._exceptions", ".._core._numbers"}  # _numbers: the number check
                 or top in THIRD_PARTY
                 or top in sys.stdlib_module_names
             )

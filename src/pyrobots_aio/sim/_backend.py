@@ -40,7 +40,7 @@ class SimBackend:
     """
 
     def __init__(self, world: SimWorld, *, control_rate: float = 50.0, realtime: bool = False):
-        control_rate = finite(
+        finite(  # control_rate kept as given: the message below shows it as written
             "control_rate",
             control_rate,
             positive=True,
