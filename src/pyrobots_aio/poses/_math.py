@@ -41,7 +41,8 @@ def is_number(value: object) -> bool:
     """Whether ``value`` is a real number a float can hold (or NaN, or infinite); not a bool."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return False
-    return not isinstance(value, int) or as_float(value) is not None
+    number: object = value  # typeshed's Real and int do not mix
+    return not isinstance(number, int) or as_float(number) is not None
 
 
 def finite_float(name: str, value: object) -> float:
