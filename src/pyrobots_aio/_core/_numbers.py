@@ -33,7 +33,7 @@ def shown(value: object) -> str:
 
     Example:
         >>> shown(0.5), shown(-(10**400)), shown("x" * 300)[-6:]
-        ('0.5', '-an int of about 10**400', "xxx...")
+        ('0.5', '-an int of about 10**400', 'xxx...')
     """
     if isinstance(value, int) and not isinstance(value, bool) and _too_large(value):
         sign = "-" if value < 0 else ""
