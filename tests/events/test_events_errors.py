@@ -67,19 +67,20 @@ async def test_conditions_of_the_wrong_type() -> None:
     async with Robot() as robot:
         robot.state.update(SENSORS)
         assert _refused(robot, "ir_left", above="x") == (
-            "above= must be a number, got 'x' (str); write e.g. above=0.3"
+            "above= must be a finite number, got 'x'; write e.g. above=0.3"
         )
         assert _refused(robot, "ir_left", below=True) == (
-            "below= must be a number, got True (bool); write e.g. below=0.3"
+            "below= must be a finite number, got True (a bool is not a number); "
+            "write e.g. below=0.3"
         )
         assert _refused(robot, "ir_left", below=float("nan")) == (
-            "below= must be a number, got nan (float); write e.g. below=0.3"
+            "below= must be a finite number, got nan; write e.g. below=0.3"
         )
         assert _refused(robot, "ir_left", increase=0) == (
-            "increase= must be a positive number, got 0 (int); write e.g. increase=0.5"
+            "increase= must be a positive number, got 0; write e.g. increase=0.5"
         )
         assert _refused(robot, "ir_left", decrease=-0.5) == (
-            "decrease= must be a positive number, got -0.5 (float); write e.g. decrease=0.5"
+            "decrease= must be a positive number, got -0.5; write e.g. decrease=0.5"
         )
         assert _refused(robot, "bumper", becomes=True, held_for=-1) == (
             "held_for= must be a number of seconds >= 0, got -1; write e.g. held_for=2.0"

@@ -160,9 +160,11 @@ async def test_bad_motion_arguments_are_refused(base: Base) -> None:
             robot.drive(math.nan, 0.0)
         with pytest.raises(ValueError, match=r"^w must be a finite number, got '1'$"):
             robot.drive(0.0, "1")  # type: ignore[arg-type]
-        with pytest.raises(ValueError, match=r"^speed must be positive, got -1$"):
+        with pytest.raises(ValueError, match=r"^speed must be a positive finite number, got -1$"):
             await robot.drive_distance(1.0, speed=-1)
-        with pytest.raises(ValueError, match=r"^angle must be a finite number, got inf$"):
+        with pytest.raises(
+            ValueError, match=r"^angle must be a finite number from -6283.19 to 6283.19, got inf; "
+        ):
             await robot.rotate_angle(math.inf)
         await robot.sleep(0.1)
         assert robot.state.docked  # nothing moved

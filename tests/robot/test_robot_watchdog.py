@@ -232,9 +232,10 @@ async def test_block_threshold_none_turns_the_watchdog_off(reports: Reports) -> 
 def test_a_bad_block_threshold_is_refused_naming_it(value: object) -> None:
     with pytest.raises(ValueError, match=r"^block_threshold must be") as caught:
         Robot(block_threshold=value)  # type: ignore[arg-type]
+    hint = " (a bool is not a number)" if value is True else ""
     assert str(caught.value) == (
         "block_threshold must be a number of seconds from 0.01 up, or None to turn the loop "
-        f"watchdog off, got {value!r}"
+        f"watchdog off, got {value!r}{hint}"
     )
 
 

@@ -187,6 +187,6 @@ def test_bad_arguments_are_rejected() -> None:
 @pytest.mark.asyncio
 async def test_bad_motion_arguments_fail_the_action_and_leave_the_wheels_still() -> None:
     async with SimRobot() as robot:
-        with pytest.raises(ValueError, match=r"speed must be positive, got -1"):
+        with pytest.raises(ValueError, match=r"speed must be a positive finite number, got -1"):
             await robot.drive_distance(1.0, speed=-1)
         assert robot.world.command == (0.0, 0.0)

@@ -463,7 +463,7 @@ def test_set_time_moves_the_clock_not_the_physics(world: SimWorld) -> None:
     assert after == 5.01 + 10 * 0.002
     world.step(10)
     assert world.time == after
-    with pytest.raises(ValueError, match=r"^the simulation time must be a finite number, not inf$"):
+    with pytest.raises(ValueError, match=r"^the simulation time must be a finite number, got inf$"):
         world.set_time(math.inf)
 
 
@@ -482,9 +482,7 @@ def test_bad_arguments(world: SimWorld) -> None:
         ValueError, match=r"^cannot step a negative number of physics steps \(-1\)$"
     ):
         world.step(-1)
-    with pytest.raises(
-        ValueError, match=r"^the velocity command must be finite numbers, not v=nan, w=0\.0$"
-    ):
+    with pytest.raises(ValueError, match=r"^v must be a finite number, got nan$"):
         world.set_command(math.nan, 0.0)
     with pytest.raises(ValueError, match=r"^physics_dt must be a positive number of seconds"):
         SimWorld(physics_dt=0.0)

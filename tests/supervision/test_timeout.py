@@ -117,6 +117,7 @@ async def test_the_call_form_and_fractions_of_a_second() -> None:
 
 @pytest.mark.parametrize("seconds", [0, -1, math.inf, math.nan, True, "2"])
 def test_bad_deadlines_are_refused(seconds: object) -> None:
-    message = f"timeout must be a positive number of seconds, got {seconds!r}"
+    hint = " (a bool is not a number)" if seconds is True else ""
+    message = f"timeout must be a positive number of seconds, got {seconds!r}{hint}"
     with pytest.raises(ValueError, match=f"^{re.escape(message)}$"):
         timeout(seconds)  # type: ignore[arg-type]

@@ -118,8 +118,9 @@ def test_a_bad_control_rate_is_refused() -> None:
     for rate in (0, -1, math.inf, "50", True):
         with pytest.raises(ValueError, match="control_rate") as caught:
             FakeBase(control_rate=rate)  # type: ignore[arg-type]
+        hint = " (a bool is not a number)" if rate is True else ""
         assert str(caught.value) == (
-            f"control_rate must be a positive number of ticks per second, got {rate!r}"
+            f"control_rate must be a positive number of ticks per second, got {rate!r}{hint}"
         )
 
 

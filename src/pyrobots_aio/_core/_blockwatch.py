@@ -39,7 +39,6 @@ plain ready callback, so it takes no virtual time and changes no timer's order.
 from __future__ import annotations
 
 import asyncio
-import math
 import os
 import sys
 import sysconfig
@@ -51,6 +50,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ._instrument import EventKind, ExecEvent
+from ._numbers import finite
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -103,17 +103,13 @@ def check_block_threshold(value: object) -> float | None:
     """
     if value is None:
         return None
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, int | float)
-        or not MIN_BLOCK_THRESHOLD <= value < math.inf
-    ):
-        msg = (
-            f"block_threshold must be a number of seconds from {MIN_BLOCK_THRESHOLD} up, or None "
-            f"to turn the loop watchdog off, got {value!r}"
-        )
-        raise ValueError(msg)
-    return float(value)
+    return finite(
+        "block_threshold",
+        value,
+        low=MIN_BLOCK_THRESHOLD,
+        must=f"a number of seconds from {MIN_BLOCK_THRESHOLD} up, or None to turn the loop "
+        "watchdog off",
+    )
 
 
 @dataclass(frozen=True, slots=True)

@@ -22,6 +22,8 @@ from typing import Any
 import anyio
 import anyio._backends._asyncio
 
+from ._numbers import finite
+
 
 class Countdown:
     """A future done once `tick` has been called ``count`` times (at once if ``count`` is 0).
@@ -111,6 +113,7 @@ async def sleep_until(deadline: float) -> None:
         >>> run(main)
         1.2
     """
+    deadline = finite("deadline", deadline)  # a NaN in the loop's timer heap breaks its order
     loop = asyncio.get_running_loop()
     fut = loop.create_future()
     timer = loop.call_at(deadline, _set_unless_done, fut)

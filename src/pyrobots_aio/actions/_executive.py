@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._core._logging import LogScope
 from .._core._loops import current_loop, wrong_loop
+from .._core._numbers import finite
 from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
@@ -489,10 +490,4 @@ def _check_options(max_actions: object, cancel_grace: object) -> None:
     ):
         msg = f"max_actions must be a positive integer or None, got {max_actions!r}"
         raise ValueError(msg)
-    if (
-        isinstance(cancel_grace, bool)
-        or not isinstance(cancel_grace, int | float)
-        or not 0 < cancel_grace < float("inf")
-    ):
-        msg = f"cancel_grace must be a positive number of seconds, got {cancel_grace!r}"
-        raise ValueError(msg)
+    finite("cancel_grace", cancel_grace, positive=True, must="a positive number of seconds")

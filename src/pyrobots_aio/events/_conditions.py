@@ -19,8 +19,9 @@ import difflib
 import math
 from dataclasses import dataclass
 from numbers import Real
-from typing import TYPE_CHECKING, Any, TypedDict, TypeGuard
+from typing import TYPE_CHECKING, Any, TypedDict, cast
 
+from .._core._numbers import finite
 from .._exceptions import InvalidConditionError
 
 if TYPE_CHECKING:
@@ -218,12 +219,13 @@ def parse(var: str | None, cond: Mapping[str, object]) -> Condition:
 
 def check_frequency(max_firing_freq: object) -> float:
     """Validate ``max_firing_freq``; return it as a float."""
-    if not _is_number(max_firing_freq) or not 0 <= max_firing_freq < math.inf:
-        raise InvalidConditionError(
-            "max_firing_freq must be a number of firings per second >= 0 (0: unlimited), "
-            f"got {max_firing_freq!r}"
-        )
-    return float(max_firing_freq)
+    return finite(
+        "max_firing_freq",
+        max_firing_freq,
+        low=0,
+        must="a number of firings per second >= 0 (0: unlimited)",
+        error=InvalidConditionError,
+    )
 
 
 def check_poll(poll: object, var: str | None) -> float | None:
@@ -234,9 +236,13 @@ def check_poll(poll: object, var: str | None) -> float | None:
         raise InvalidConditionError(
             f"poll= applies to predicates; the key {var!r} is checked on every write: drop poll="
         )
-    if not _is_number(poll) or not 0 < poll < math.inf:
-        raise InvalidConditionError(f"poll= must be a number of seconds > 0 or None, got {poll!r}")
-    return float(poll)
+    return finite(
+        "poll=",
+        poll,
+        positive=True,
+        must="a number of seconds > 0 or None",
+        error=InvalidConditionError,
+    )
 
 
 def check_blocking(blocking: object) -> bool:
@@ -266,22 +272,17 @@ def check_numeric_key(key: str, condition: Condition, current: object) -> None:
     )
 
 
-def _is_number(value: object) -> TypeGuard[float]:
-    if isinstance(value, bool) or not isinstance(value, Real):
-        return False
-    return not math.isnan(value)
-
-
 def _number(kind: str, target: object) -> float:
     positive = kind in _RELATIVE
-    if not _is_number(target) or (positive and not 0 < target < math.inf):
-        what = "a positive number" if positive else "a number"
-        example = "0.5" if positive else "0.3"
-        raise InvalidConditionError(
-            f"{kind}= must be {what}, got {target!r} ({type(target).__name__}); "
-            f"write e.g. {kind}={example}"
-        )
-    return target
+    finite(  # the target itself is kept: descriptions show `above=0` as written
+        f"{kind}=",
+        target,
+        positive=positive,
+        must="a positive number" if positive else "a finite number",
+        fix=f"write e.g. {kind}={'0.5' if positive else '0.3'}",
+        error=InvalidConditionError,
+    )
+    return cast("float", target)
 
 
 def _equalable(var: str, kind: str, target: object) -> object:
@@ -296,11 +297,14 @@ def _equalable(var: str, kind: str, target: object) -> object:
 
 
 def _held_for(seconds: object) -> float:
-    if not _is_number(seconds) or not 0 <= seconds < math.inf:
-        raise InvalidConditionError(
-            f"held_for= must be a number of seconds >= 0, got {seconds!r}; write e.g. held_for=2.0"
-        )
-    return float(seconds)
+    return finite(
+        "held_for=",
+        seconds,
+        low=0,
+        must="a number of seconds >= 0",
+        fix="write e.g. held_for=2.0",
+        error=InvalidConditionError,
+    )
 
 
 def _unknown(name: str) -> str:

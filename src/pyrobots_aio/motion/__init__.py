@@ -18,12 +18,17 @@ from ._base import Pose2D as Pose2D
 from ._base import World as World
 from ._base import WorldBase as WorldBase
 from ._control import Controllers as Controllers
+from ._math import MAX_DISTANCE as MAX_DISTANCE
+from ._math import MAX_TURN as MAX_TURN
+from ._math import limit_speeds as limit_speeds
 from ._math import wrap_angle as wrap_angle
 
 __all__ = [
     "ANGLE_TOLERANCE",
     "DISTANCE_TOLERANCE",
     "DOCK_APPROACH",
+    "MAX_DISTANCE",
+    "MAX_TURN",
     "UNDOCK_DISTANCE",
     "WHEELS",
     "Controllers",
@@ -31,5 +36,6 @@ __all__ = [
     "Pose2D",
     "World",
     "WorldBase",
+    "limit_speeds",
     "wrap_angle",
 ]

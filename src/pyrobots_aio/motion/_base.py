@@ -17,11 +17,12 @@ import abc
 import math
 from typing import TYPE_CHECKING, Protocol
 
+from .._core._numbers import shown
 from .._exceptions import MotionError
 from ..actions import action, current_action, lock
 from ..resources import Resource
 from ..robot import Robot
-from ._math import checked, ramp, wrap_angle
+from ._math import MAX_DISTANCE, MAX_TURN, checked, ramp, wrap_angle
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -49,6 +50,8 @@ UNDOCK_DISTANCE = 0.35
 """Metres `DriveBase.undock` drives straight ahead, off the dock."""
 _MIN_V, _MIN_W = 0.03, 0.15
 _DOCK_SPEED, _DOCK_REVERSE_LIMIT = 0.05, 0.7
+_METRES = "drive_distance takes metres, at most 100 km either way"
+_RADIANS = "rotate_angle turns by radians, at most 1000 turns either way (math.radians(degrees))"
 
 Pose2D = tuple[float, float, float]
 """A planar pose ``(x, y, yaw)``, in metres and radians."""
@@ -124,8 +127,12 @@ class DriveBase(Robot, abc.ABC):
         """Command linear speed ``v`` (m/s) and angular speed ``w`` (rad/s) until changed.
 
         A plain call that does not lock the wheels; actions lock `WHEELS` first.
+        Any finite numbers are taken; a command beyond the base's top wheel
+        speed is scaled down as a whole, keeping its curvature, as a robot's
+        firmware does (a simulated base's ``robot.world.command`` shows what the wheels get).
 
         Raises:
+            ValueError: ``v`` or ``w`` is not a finite number.
             EmergencyStopError: The emergency stop is latched (``drive(0, 0)``
                 is still allowed: it stops).
         """
@@ -148,8 +155,12 @@ class DriveBase(Robot, abc.ABC):
     @action(on_pause=park)
     @lock(WHEELS)
     async def drive_distance(self, distance: float, speed: float = 0.2) -> float:
-        """Drive straight ``distance`` metres (negative: backwards); return the distance done."""
-        goal = checked("distance", distance)
+        """Drive straight ``distance`` metres (negative: backwards); return the distance done.
+
+        ``distance`` is at most `MAX_DISTANCE` (100 km) either way; a larger
+        one, or a number that is not finite, raises `ValueError`.
+        """
+        goal = checked("distance", distance, bound=MAX_DISTANCE, fix=_METRES)
         top = checked("speed", speed, positive=True)
         x0, y0, _ = self.odom_pose()
 
@@ -172,8 +183,12 @@ class DriveBase(Robot, abc.ABC):
     @action(on_pause=park)
     @lock(WHEELS)
     async def rotate_angle(self, angle: float, speed: float = 1.0) -> float:
-        """Turn in place by ``angle`` radians (positive: counter-clockwise); return the turn."""
-        goal = checked("angle", angle)
+        """Turn in place by ``angle`` radians (positive: counter-clockwise); return the turn.
+
+        The turn is not wrapped: ``4 * math.pi`` turns twice. It is at most
+        `MAX_TURN` (1000 turns) either way; more raises `ValueError`.
+        """
+        goal = checked("angle", angle, bound=MAX_TURN, fix=_RADIANS)
         top = checked("speed", speed, positive=True)
         turned, last = 0.0, self.odom_pose()[2]
 
@@ -204,6 +219,12 @@ class DriveBase(Robot, abc.ABC):
         top = checked("speed", speed, positive=True)
         target = self.poses.inframe(pose, "map")
         tx, ty, tyaw = target.x, target.y, self.poses.euler(target)[2]
+        x0, y0, _ = self.map_pose()
+        if (far := math.hypot(tx - x0, ty - y0)) > MAX_DISTANCE:
+            msg = (
+                f"navigate_to({shown(pose)}): the goal is {far:g} m away, beyond {MAX_DISTANCE:g} m"
+            )
+            raise ValueError(msg)
 
         def step() -> bool:
             x, y, yaw = self.map_pose()

@@ -10,12 +10,13 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Iterable, Sequence
-from typing import SupportsFloat, TypeAlias, cast
+from typing import TypeAlias
 
 import numpy as np
 import transforms3d.euler as t3d_euler
 from numpy.typing import NDArray
 
+from .._core._numbers import as_float, finite, shown
 from .._exceptions import InvalidPoseError
 
 Matrix: TypeAlias = NDArray[np.float64]
@@ -29,31 +30,24 @@ EDGE_TOLERANCE = 1e-9
 
 TAU = 2.0 * math.pi
 _LAST_ROW = (0.0, 0.0, 0.0, 1.0)
-_SHOWN_CHARS = 200
 
 
 def show(value: object) -> str:
     """Return a one-line, bounded ``repr`` of ``value`` for error messages."""
-    text = f"array({value.tolist()!r})" if isinstance(value, np.ndarray) else repr(value)
-    return text if len(text) <= _SHOWN_CHARS else text[: _SHOWN_CHARS - 3] + "..."
+    return f"array({shown(value.tolist())})" if isinstance(value, np.ndarray) else shown(value)
 
 
 def is_number(value: object) -> bool:
-    """Whether ``value`` is a real number; a bool is not one."""
-    if isinstance(value, bool):
+    """Whether ``value`` is a real number a float can hold (or NaN, or infinite); not a bool."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return False
-    return isinstance(value, numbers.Real)
+    number: object = value  # typeshed's Real and int do not mix
+    return not isinstance(number, int) or as_float(number) is not None
 
 
 def finite_float(name: str, value: object) -> float:
     """Return ``value`` as a float, or raise `InvalidPoseError` naming ``name``."""
-    if is_number(value):
-        number = float(cast("SupportsFloat", value))
-        if math.isfinite(number):
-            return number
-    hint = " (a bool is not a number)" if isinstance(value, bool | np.bool_) else ""
-    msg = f"{name} must be a finite real number, got {value!r}{hint}"
-    raise InvalidPoseError(msg)
+    return finite(name, value, must="a finite real number", error=InvalidPoseError)
 
 
 def finite_floats(names: Sequence[str], values: object, what: str) -> list[float]:

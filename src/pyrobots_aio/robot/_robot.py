@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import logging
+import math
 import types
 from typing import TYPE_CHECKING, Any, Self, TypeVar, TypeVarTuple
 
@@ -17,6 +18,7 @@ from .._core._blockwatch import DEFAULT_BLOCK_THRESHOLD, BlockWatch, check_block
 from .._core._instrument import Instrument, Instruments
 from .._core._logging import LogScope, check_level
 from .._core._loops import current_loop, no_asyncio_loop
+from .._core._numbers import finite
 from .._core._signals import SignalStop
 from .._core._waiting import sleep_until
 from .._exceptions import ActionDefinitionError, ActionError, EventLoopError, PyRobotsError
@@ -379,7 +381,13 @@ class Robot(StateMethods, EmergencyStop):
 
         Inside an action, time spent paused does not count: an action paused
         for 10 s in the middle of ``robot.sleep(2)`` wakes 12 s after it began.
+        As ``asyncio.sleep``, 0 or less returns at once and ``math.inf`` never does.
+
+        Raises:
+            ValueError: ``seconds`` is NaN, or not a number a float can hold.
         """
+        if seconds != math.inf:  # sleep(math.inf) sleeps until cancelled, as asyncio's does
+            seconds = finite("seconds", seconds, must="a number of seconds (or math.inf)")
         handle = current_action.get()
         if handle is None or handle._executive is not self._executive:
             await asyncio.sleep(seconds)

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import math
 from typing import TYPE_CHECKING
 
 from .._core._clock import is_virtual
+from .._core._numbers import finite
 from .._exceptions import LockstepError
 from ..motion import Controllers
 
@@ -40,13 +40,12 @@ class SimBackend:
     """
 
     def __init__(self, world: SimWorld, *, control_rate: float = 50.0, realtime: bool = False):
-        if isinstance(control_rate, bool) or not (
-            isinstance(control_rate, int | float) and 0 < control_rate < math.inf
-        ):
-            msg = (
-                f"control_rate must be a positive number of ticks per second, got {control_rate!r}"
-            )
-            raise ValueError(msg)
+        finite(  # control_rate kept as given: the message below shows it as written
+            "control_rate",
+            control_rate,
+            positive=True,
+            must="a positive number of ticks per second",
+        )
         steps = round(1.0 / (control_rate * world.physics_dt))
         if steps < 1 or abs(steps * world.physics_dt * control_rate - 1.0) > 1e-9:
             msg = (

@@ -33,6 +33,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import ModelLoadError, SimulationUnavailableError, UnknownFrameError
+from .._core._numbers import finite
+from ..motion import limit_speeds
 from ._models import ModelLayout
 from ._models import model_path as _default_model_path
 from ._odometry import Odometry
@@ -134,8 +136,9 @@ class SimWorld:
     ) -> None:
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, not {seed!r}")
-        if not (math.isfinite(physics_dt) and physics_dt > 0):
-            raise ValueError(f"physics_dt must be a positive number of seconds, not {physics_dt!r}")
+        physics_dt = finite(
+            "physics_dt", physics_dt, positive=True, must="a positive number of seconds"
+        )
         mujoco = _import_mujoco()
         path = Path(model_path) if model_path is not None else _default_model_path()
         model = _load(mujoco, path)
@@ -214,8 +217,7 @@ class SimWorld:
         Raises:
             ValueError: ``now`` is not a finite number.
         """
-        if not math.isfinite(now):
-            raise ValueError(f"the simulation time must be a finite number, not {now!r}")
+        now = finite("the simulation time", now)
         self._clock_start = (now, self._steps)
 
     @property
@@ -242,21 +244,17 @@ class SimWorld:
         needs a wheel faster than its top speed is scaled down as a whole, so the
         robot keeps the commanded curvature; `command` reports the result.
 
+        Any finite numbers are taken (``1.7e308`` gives the top speed).
+
         Raises:
             ValueError: ``v`` or ``w`` is not a finite number.
         """
-        if not (math.isfinite(v) and math.isfinite(w)):
-            raise ValueError(f"the velocity command must be finite numbers, not v={v!r}, w={w!r}")
+        v, w = finite("v", v), finite("w", w)
         layout = self._layout
-        half_track = layout.track / 2
-        left = (v - w * half_track) / layout.wheel_radius
-        right = (v + w * half_track) / layout.wheel_radius
-        fastest = max(abs(left), abs(right))
-        if fastest > layout.max_wheel_speed:
-            scale = layout.max_wheel_speed / fastest
-            left, right, v, w = left * scale, right * scale, v * scale, w * scale
-        self._ctrl[layout.actuators[0]] = left
-        self._ctrl[layout.actuators[1]] = right
+        half_track, radius = layout.track / 2, layout.wheel_radius
+        v, w = limit_speeds(v, w, half_track, layout.max_wheel_speed * radius)
+        self._ctrl[layout.actuators[0]] = (v - w * half_track) / radius
+        self._ctrl[layout.actuators[1]] = (v + w * half_track) / radius
         self._command = (v, w)
 
     def stop(self) -> None:
@@ -300,7 +298,7 @@ class SimWorld:
         Raises:
             ValueError: ``dt`` is negative or not a whole number of physics steps.
         """
-        n = round(dt / self._dt)
+        n = round(finite("dt", dt) / self._dt)
         if n < 0 or not math.isclose(n * self._dt, dt, rel_tol=1e-9, abs_tol=1e-12):
             raise ValueError(
                 f"dt={dt!r} s is not a whole, non-negative number of physics steps "
@@ -320,8 +318,7 @@ class SimWorld:
         Raises:
             ValueError: A coordinate is not a finite number.
         """
-        if not all(math.isfinite(value) for value in (x, y, yaw)):
-            raise ValueError(f"the pose must be finite numbers, not x={x!r}, y={y!r}, yaw={yaw!r}")
+        x, y, yaw = finite("x", x), finite("y", y), finite("yaw", yaw)
         layout, data, mujoco = self._layout, self._data, self._mujoco
         qpos = layout.free_qpos
         data.qpos[qpos : qpos + 3] = (x, y, self._rest_z)

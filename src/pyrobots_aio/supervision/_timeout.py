@@ -12,9 +12,9 @@ from __future__ import annotations
 import asyncio
 import contextvars
 import functools
-import math
 from typing import TYPE_CHECKING, Any
 
+from .._core._numbers import finite
 from .._exceptions import ActionDefinitionError, ActionInterrupted
 from ..actions import Action, current_action
 from ._wrap import ActionDecorator
@@ -58,10 +58,7 @@ def timed_out(error: BaseException) -> bool:
 
 def check_seconds(name: str, value: object) -> float:
     """Return ``value`` as a float, or raise `ValueError` unless it is a positive finite number."""
-    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < math.inf:
-        msg = f"{name} must be a positive number of seconds, got {value!r}"
-        raise ValueError(msg)
-    return float(value)
+    return finite(name, value, positive=True, must="a positive number of seconds")
 
 
 class timeout(ActionDecorator):  # lower case: a decorator, as DESIGN names it

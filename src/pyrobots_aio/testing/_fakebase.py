@@ -6,19 +6,21 @@ CPU allows). Obstacles are boxes; the robot cannot enter them (it is pushed
 back out, its wheels slipping); its front bumper presses on contact, its IR
 rangefinders measure the distance to the boxes, and it is ``docked`` when its
 charging contacts lie on the dock's pad. No physics beyond that: commands take
-effect at once, odometry integrates the commanded speeds exactly.
+effect at once (up to the simulator's top wheel speed), odometry integrates
+the commanded speeds exactly.
 """
 
 from __future__ import annotations
 
 import asyncio
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from .. import UnknownFrameError
-from ..motion import Controllers, WorldBase
+from .._core._numbers import as_float, finite, shown
+from ..motion import Controllers, WorldBase, limit_speeds
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Collection, Iterable
@@ -29,6 +31,10 @@ if TYPE_CHECKING:
 
 RADIUS = 0.171
 """Metres: the robot's radius; its charging contacts are this far behind its centre."""
+TRACK = 0.235
+"""Metres between the wheels (the simulator's, a Create 3's)."""
+TOP_WHEEL_SPEED = 0.306
+"""Metres per second: the fastest a wheel turns (the simulator's, a Create 3's)."""
 IR_RANGE = 0.4
 """Metres: an IR rangefinder's reading when it sees nothing closer."""
 IR_SENSORS = {
@@ -109,10 +115,11 @@ def _room(xmin: float, ymin: float, xmax: float, ymax: float) -> list[Box]:
 
 
 def _finite(name: str, values: tuple[float, ...]) -> tuple[float, ...]:
-    if not all(isinstance(v, int | float) and math.isfinite(v) for v in values):
-        msg = f"{name} must be finite numbers, got {values!r}"
+    numbers = tuple(as_float(v) for v in values)
+    if None in numbers:
+        msg = f"{name} must be finite numbers, got {shown(values)}"
         raise ValueError(msg)
-    return tuple(float(v) for v in values)
+    return cast("tuple[float, ...]", numbers)
 
 
 def _bounds(name: str, box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
@@ -193,8 +200,17 @@ class FakeWorld:
         self._odom = (0.0, 0.0, 0.0)
 
     def set_command(self, v: float, w: float) -> None:
-        """Drive at ``v`` (m/s) and ``w`` (rad/s) from the next step on."""
-        self.command = (v, w)
+        """Drive at ``v`` (m/s) and ``w`` (rad/s) from the next step on.
+
+        As on the simulator (a Create 3), no wheel goes faster than
+        `TOP_WHEEL_SPEED`: a faster command is scaled down as a whole, keeping
+        its curvature, and `command` holds what is applied.
+
+        Raises:
+            ValueError: ``v`` or ``w`` is not a finite number.
+        """
+        v, w = finite("v", v), finite("w", w)
+        self.command = limit_speeds(v, w, TRACK / 2, TOP_WHEEL_SPEED)
 
     def base_pose(self) -> Pose2D:
         """The robot's true pose ``(x, y, yaw)`` in the map."""
@@ -206,6 +222,7 @@ class FakeWorld:
 
     def step(self, dt: float) -> None:
         """Move for ``dt`` seconds at the command; the boxes push the robot back out."""
+        dt = finite("dt", dt, low=0.0)
         v, w = self.command
         self._odom = _arc(self._odom, v * dt, w * dt)
         x, y, yaw = _arc(self._pose, v * dt, w * dt)
@@ -332,13 +349,12 @@ class FakeBase(WorldBase):
         start: Pose2D | None = None,
         **options: Any,
     ) -> None:
-        if isinstance(control_rate, bool) or not (
-            isinstance(control_rate, int | float) and 0 < control_rate < math.inf
-        ):
-            msg = (
-                f"control_rate must be a positive number of ticks per second, got {control_rate!r}"
-            )
-            raise ValueError(msg)
+        control_rate = finite(
+            "control_rate",
+            control_rate,
+            positive=True,
+            must="a positive number of ticks per second",
+        )
         super().__init__(**options)
         self.world: FakeWorld = FakeWorld(room=room, dock=dock, obstacles=obstacles, start=start)
         self.ticks = 0
