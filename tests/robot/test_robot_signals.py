@@ -86,3 +86,38 @@ def test_a_robot_off_the_main_thread_leaves_the_signals_alone() -> None:
     worker.start()
     worker.join()
     assert during == [before]
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts() -> None:
+    # The second Ctrl-C lands before the first one's cancellation has reached the
+    # actions: its own cancel starts their cleanup, which must be cut short as well.
+    loop = asyncio.get_running_loop()
+
+    @action
+    async def blink(robot: Robot) -> None:
+        await robot.sleep(0.01)
+
+    @action
+    async def walk(robot: Robot) -> None:
+        try:
+            await robot.sleep(3600)
+        except asyncio.CancelledError:
+            end = loop.time() + 30.0  # a long, busy cleanup
+            while loop.time() < end:
+                await blink(robot)
+            raise
+
+    async def main() -> None:
+        async with Robot(actions=[walk], cancel_grace=120) as robot:
+            robot.walk()
+            await asyncio.sleep(0.1)
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGINT)
+            await asyncio.sleep(3600)
+
+    start = loop.time()
+    with pytest.raises(KeyboardInterrupt):
+        await main()
+    assert loop.time() - start < 1.0  # not the 30 s cleanup

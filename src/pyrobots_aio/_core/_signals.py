@@ -46,6 +46,9 @@ if TYPE_CHECKING:
 
 _log = logging.getLogger("pyrobots_aio.signals")
 
+CUT_PASSES = 5
+"""Loop iterations in a row on which a second signal cancels every task (see `SignalStop._cut`)."""
+
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 """The signals `stop_on_signals` handles."""
 
@@ -120,10 +123,21 @@ class SignalStop:
             return
         _log.warning("%s again: stopping at once, cutting the cleanup short", signum.name)
         self._restore()  # a third signal gets Python's default
+        self._cut(f"{signum.name} received again", CUT_PASSES)
+
+    def _cut(self, reason: str, passes: int) -> None:
+        """Cancel every started task; again on the next ``passes - 1`` loop iterations.
+
+        A second signal that comes before the first one's cancellation has
+        reached the actions makes them start their cleanup now: the passes
+        that follow cut that cleanup short too.
+        """
         assert self._loop is not None
         for task in asyncio.all_tasks(self._loop):
             if _started(task):
-                self._cancel(task, f"{signum.name} received again")
+                self._cancel(task, reason)
+        if passes > 1:
+            self._loop.call_soon(self._cut, reason, passes - 1)
 
     def _cancel(self, task: asyncio.Task[object] | None, reason: str) -> None:
         if task is not None and task.cancel(reason) and task is self._task:
