@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import importlib.util
+import re
 import subprocess
 import sys
 import threading
@@ -187,3 +188,15 @@ def load_suite(name: str, file: str | None = None) -> ModuleType:
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
+
+
+def assert_stale_error(error: BaseException, namespace: str, timeout: float) -> None:
+    """``error`` is the stale-odometry MotionError for ``namespace``, aged >= ``timeout``."""
+    found = re.fullmatch(
+        rf"odometry on {namespace}/odom is stale: no message for (\d+\.\d\d) s \(odom_timeout "
+        rf"{timeout:g} s\); the base was stopped \(zero Twist on {namespace}/cmd_vel\) and "
+        r"refuses to move until odometry comes back — is its driver running\?",
+        str(error),
+    )
+    assert found is not None, str(error)
+    assert float(found.group(1)) >= timeout - 0.005  # (the age is shown rounded)
