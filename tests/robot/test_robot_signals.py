@@ -121,3 +121,9 @@ async def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts(
     with pytest.raises(KeyboardInterrupt):
         await main()
     assert loop.time() - start < 1.0  # not the 30 s cleanup
+
+
+@pytest.mark.parametrize("value", ["no", 0, None])
+def test_handle_signals_must_be_a_bool(value: object) -> None:
+    with pytest.raises(TypeError, match=r"handle_signals must be True or False, got"):
+        Robot(handle_signals=value)  # type: ignore[arg-type]

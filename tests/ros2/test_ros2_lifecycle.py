@@ -187,3 +187,9 @@ def test_health_needs_diagnostics() -> None:
     ros2 = attach_ros2(Robot(), "executive", diagnostics_period=None)
     with pytest.raises(ValueError, match=r"publishes no /diagnostics \(diagnostics_period=None\)"):
         ros2.publish_health(HealthMonitor(Robot()))
+
+
+def test_publish_health_takes_a_health_monitor() -> None:
+    ros2 = attach_ros2(Robot(), "executive")
+    with pytest.raises(TypeError, match=r"publish_health takes a HealthMonitor, got 'battery'"):
+        ros2.publish_health("battery")  # type: ignore[arg-type]

@@ -100,6 +100,10 @@ class Robot(StateMethods, EmergencyStop):
         block_threshold: float | None = DEFAULT_BLOCK_THRESHOLD,
         handle_signals: bool = True,
     ) -> None:
+        flag: object = handle_signals  # checked at run time: the annotation promises nothing
+        if not isinstance(flag, bool):
+            msg = f"handle_signals must be True or False, got {flag!r}"
+            raise TypeError(msg)
         self.handle_signals = handle_signals
         self._signals: SignalStop | None = None
         self._block_threshold = check_block_threshold(block_threshold)

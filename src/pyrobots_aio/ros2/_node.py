@@ -204,8 +204,15 @@ class Ros2Node:
         ERROR, STALE), with its message and last heartbeat; from the next publication on.
 
         Raises:
+            TypeError: ``monitor`` is not a `HealthMonitor`.
             ValueError: The node publishes no diagnostics (``diagnostics_period=None``).
         """
+        from ..supervision import HealthMonitor
+
+        given: object = monitor  # checked at run time: the annotation promises nothing
+        if not isinstance(given, HealthMonitor):
+            msg = f"publish_health takes a HealthMonitor, got {given!r}"
+            raise TypeError(msg)
         if self._diagnostics_period is None:
             msg = (
                 f"{self!r} publishes no /diagnostics (diagnostics_period=None); "
