@@ -1,16 +1,17 @@
 """The shared motion suite (tests/motion) on `Ros2Robot`, driving a sim-node in another process.
 
 The same test functions as for SimRobot and FakeBase, imported from the
-suite's modules; here each test gets a fresh ``sim-node --rate 4`` under a
-namespace of its own, and runs on a loop at the same rate (``LOOP_RATE``),
-so the test's seconds are simulated seconds, four times faster than real
+suite's modules; here each test gets a fresh ``sim-node --rate LOOP_RATE``
+under a namespace of its own, and runs on a loop at the same rate, so the
+test's seconds are simulated seconds, `LOOP_RATE` times faster than real
 time. The robot's truth is its own localisation: odometry placed in the map
 where the sim-node's robot starts. Left out: the exact count of control
 ticks in a second (two clocks in two processes agree to a tick, not
-exactly: `test_starts_docked_with_the_state_keys_and_frames` checks it to
-one tick) and the bump injected at each action boundary, whose check that
-the reflex starts at the very instant of the bump holds in virtual time
-only (the random walks here bump into walls of their own).
+exactly, and a loaded machine delivers late messages in bursts:
+`test_starts_docked_with_the_state_keys_and_frames` checks the rate over
+four seconds to 10 %) and the bump injected at each action boundary, whose
+check that the reflex starts at the very instant of the bump holds in
+virtual time only (the random walks here bump into walls of their own).
 """
 
 from __future__ import annotations
@@ -111,5 +112,5 @@ async def test_starts_docked_with_the_state_keys_and_frames(base: Any) -> None:
         assert {"odom", "base_link", "dock"} <= robot.poses.frames()
         assert robot.control_period == pytest.approx(0.02, rel=0.1)
         version = robot.state.version("v")
-        await robot.sleep(1.0)
-        assert robot.state.version("v") - version == pytest.approx(50, abs=1)
+        await robot.sleep(4.0)
+        assert robot.state.version("v") - version == pytest.approx(200, rel=0.1)
