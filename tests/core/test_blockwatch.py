@@ -1,9 +1,15 @@
-"""BlockWatch on a bare asyncio loop: idle loops are left alone, each block is one event."""
+"""BlockWatch on a bare asyncio loop: a turning loop is left alone, each block is one event.
+
+Every test runs both ways of watching: on the kernel's timers (Linux: the
+loop beats, the thread sleeps until it misses a beat) and polling (where
+there are none, or the loop has no readers).
+"""
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import os
 import threading
 import time
 from typing import TYPE_CHECKING
@@ -51,6 +57,18 @@ def warned() -> Iterator[Warned]:
     logger.removeHandler(handler)
 
 
+@pytest.fixture(autouse=True, params=["timers", "polling"])
+def mode(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """How the watchdog watches: kernel timers, or (as where there are none) polling."""
+    if request.param == "polling":
+
+        def no_timers(*, blocking: bool = True) -> _blockwatch.Timer:
+            raise OSError("no timerfd here: kernel timers as file descriptors are Linux's")
+
+        monkeypatch.setattr(_blockwatch, "Timer", no_timers)
+    return str(request.param)
+
+
 def _watch(threshold: float, blocker: object = None) -> tuple[BlockWatch, Kept]:
     kept, hub = Kept(), Instruments()
     hub.add(kept)
@@ -59,15 +77,42 @@ def _watch(threshold: float, blocker: object = None) -> tuple[BlockWatch, Kept]:
 
 
 @pytest.mark.asyncio
-async def test_an_idle_loop_is_not_probed() -> None:
+async def test_an_idle_loop_is_not_probed(mode: str) -> None:
+    descriptors = set(os.listdir("/proc/self/fd"))
     watch, kept = _watch(0.02)
     watch.start()
     try:
-        await asyncio.sleep(0.5)  # 25 looks at a loop waiting in its selector
+        await asyncio.sleep(0.5)  # polling: 25 looks at a loop waiting in its selector
     finally:
         watch.stop()
     assert watch.probes <= 1  # (one could catch the loop in the callback that wakes it)
-    assert kept.events == []
+    if mode == "timers":  # the loop beat; the thread slept (a loaded machine: a wake or two)
+        assert watch.beats >= 10
+        assert watch.wakes <= 2
+    assert (watch.blocks, kept.events) == (0, [])
+    assert set(os.listdir("/proc/self/fd")) == descriptors  # its timers are closed
+
+
+async def _busy(seconds: float) -> None:
+    """Turn the loop for ``seconds`` without a pause: short steps of pure Python."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        sum(range(1_000))
+        await asyncio.sleep(0)
+
+
+@pytest.mark.asyncio
+async def test_a_busy_loop_that_turns_does_not_wake_the_thread(mode: str) -> None:
+    watch, kept = _watch(0.02)
+    watch.start()
+    try:
+        await _busy(0.5)
+    finally:
+        watch.stop()
+    assert (watch.blocks, kept.events) == (0, [])
+    if mode == "timers":  # polling looks 25 times and probes most; timers: the loop beats
+        assert watch.beats >= 10
+        assert watch.wakes <= 2
 
 
 @pytest.mark.asyncio

@@ -9,31 +9,45 @@ blocks and the loop thread's stack at that moment; and, once the loop turns
 again, a `EventKind.LOOP_BLOCKED` event for the recorders with the whole
 duration (and an INFO line).
 
-How it watches, without costing the loop:
+How it watches, without costing the loop (Linux):
 
-- Every ``threshold / 2`` the thread looks at the loop thread's innermost
-  frame (``sys._current_frames``). A loop waiting in its selector, or busy in
-  its own machinery (``_run_once`` with no callback running), is turning: no
-  more to do, and an idle loop is never woken.
-- When the loop is inside a callback, the thread probes it: it posts a
-  callback (``call_soon_threadsafe``) that stamps the time, and waits up to
-  ``threshold`` for it. Answered: the loop turns.
-- Time the loop thread spent waiting for a CPU (other processes keeping both
-  cores busy: Linux's ``/proc/self/task/<tid>/schedstat``) does not count: the
-  wait goes on by that much, so that a loaded machine is not reported as
+- The loop beats: a kernel timer (`Timer`, a ``timerfd``) becomes readable
+  every ``threshold / 2``, and the loop's reader for it (a ready callback,
+  like any I/O) re-arms a second timer, the deadline, to expire
+  ``threshold`` after the next beat falls due.
+- The watchdog thread blocks reading the deadline: in the kernel, without
+  the GIL. While the loop turns, the deadline never expires and the thread
+  never wakes, however busy the loop (waking a Python thread takes the GIL,
+  which a busy loop hands on only at its next ``select``: a thread that
+  polled would pay for that at every look, and the loop with it).
+- The deadline expires: the loop has not run its beat for ``threshold``
+  after it fell due. Time the loop thread spent waiting for a CPU since its
+  last beat (other processes keeping both cores busy: Linux's
+  ``/proc/self/task/<tid>/schedstat``) does not count: the deadline is
+  pushed back by that much, so that a loaded machine is not reported as
   blocking code.
-- Unanswered: the loop has not turned for ``threshold``. The thread reads the
-  loop thread's stack there and then, logs the WARNING, and waits for the same
-  probe without probing again: one report per block, however long it lasts.
+- Otherwise the thread reads the loop thread's stack there and then, logs
+  the WARNING, and waits (on a callback it posts) for the loop to turn: one
+  report per block, however long it lasts.
 
 So a block is reported between ``threshold`` and ``1.5 * threshold`` after it
 began (plus the thread's wake-up latency); blocks shorter than ``threshold``
-are not reported. Loops other than asyncio's own (uvloop) have no Python frame
-to tell idle from busy: they are probed every ``threshold / 2``.
+are not reported. An idle loop wakes ``2 / threshold`` times a second for its
+beat (tens of microseconds each).
+
+Elsewhere (no ``timerfd``, or a loop without ``add_reader``) the thread polls
+instead: every ``threshold / 2`` it looks at the loop thread's innermost
+frame (``sys._current_frames``); a loop waiting in its selector, or busy in
+its own machinery (``_run_once`` with no callback running), is turning. When
+the loop is inside a callback, the thread probes it: it posts a callback that
+stamps the time, and waits up to ``threshold`` (not counting the loop
+thread's waits for a CPU) for it. Loops other than asyncio's own (uvloop)
+have no Python frame to tell idle from busy: they are probed every time.
 
 Time here is real (``time.monotonic``), never the loop's clock: a block is
-real, and a virtual-time loop that jumps ahead is not blocked. Each probe is a
-plain ready callback, so it takes no virtual time and changes no timer's order.
+real, and a virtual-time loop that jumps ahead is not blocked. Beats and
+probes are plain ready callbacks: they take no virtual time and change no
+timer's order.
 """
 
 from __future__ import annotations
@@ -51,6 +65,7 @@ from typing import TYPE_CHECKING
 
 from ._instrument import EventKind, ExecEvent
 from ._numbers import finite
+from ._timerfd import Timer
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -201,8 +216,12 @@ class BlockWatch:
         self.threshold = threshold
         self.blocks = 0
         """How many blocks were reported so far."""
+        self.beats = 0
+        """How many times the loop beat (Linux: the loop's side of the watch)."""
+        self.wakes = 0
+        """How many times the thread woke on an expired deadline (the loop missed its beat)."""
         self.probes = 0
-        """How many times the loop was probed (it was inside a callback when looked at)."""
+        """How many times the loop was probed (polling: it was inside a callback when looked at)."""
         self._loop = loop
         self._log = log
         self._instruments = instruments
@@ -214,6 +233,11 @@ class BlockWatch:
         # Reported blocks whose event is not out yet: the loop emits each once it turns (a
         # second block may be reported before it does), or stop() does.
         self._pending: list[_Report] = []
+        self._period = threshold / 2
+        self._beat_timer: Timer | None = None
+        self._deadline: Timer | None = None
+        self._beat_at = time.monotonic()
+        self._beat_queued: float | None = None
         self._thread = threading.Thread(
             target=self._watch,
             name=f"pyrobots_aio loop watchdog of {threading.current_thread().name}",
@@ -223,14 +247,33 @@ class BlockWatch:
     # -- the loop's side -------------------------------------------------------
 
     def start(self) -> None:
-        """Start the thread."""
+        """Start the beat (where there are kernel timers) and the thread."""
+        try:
+            beat, deadline = Timer(blocking=False), Timer()
+        except OSError:  # not Linux: the thread polls
+            pass
+        else:
+            try:
+                self._loop.add_reader(beat.fd, self._beat, beat, deadline)
+            except NotImplementedError:  # a loop without readers (Windows' proactor)
+                beat.close()
+                deadline.close()
+            else:
+                self._beat_timer, self._deadline = beat, deadline
+                beat.arm(self._period, self._period)
+                self._beat(beat, deadline)
         self._thread.start()
 
     def stop(self) -> None:
         """Stop and join the thread; emit the event of a block that ended but is not out yet."""
+        beat, deadline = self._beat_timer, self._deadline
+        if beat is not None and not self._loop.is_closed():
+            self._loop.remove_reader(beat.fd)
         with self._cond:
             self._stopping = True
             self._cond.notify_all()
+        if deadline is not None:
+            deadline.arm(0)  # the thread's read returns now
         # The thread leaves its waits at once; only a report being logged can hold it.
         self._thread.join(JOIN_BOUND)
         if self._thread.is_alive():
@@ -238,8 +281,19 @@ class BlockWatch:
                 "the loop watchdog thread did not stop within %s s (a log handler stuck?)",
                 JOIN_BOUND,
             )
+        elif deadline is not None and beat is not None:  # the thread reads the deadline no more
+            beat.close()
+            deadline.close()
         for report in list(self._pending):
             self._ended(report)
+
+    def _beat(self, beat: Timer, deadline: Timer) -> None:
+        """The loop turns (the reader of ``beat``): push the deadline back."""
+        beat.wait()  # the expiries so far (none if it was read already)
+        self.beats += 1
+        self._beat_queued = runqueue_wait(self._loop_native_id)
+        self._beat_at = time.monotonic()
+        deadline.arm(self._period + self.threshold)
 
     def _answer(self, probe: _Probe) -> None:
         with self._cond:
@@ -275,20 +329,52 @@ class BlockWatch:
 
     def _watch(self) -> None:
         try:
-            while self._rest(self.threshold / 2):
-                if self._turning():
-                    continue
-                probe = _Probe(time.monotonic(), self._loop.time())
-                self.probes += 1
-                try:
-                    self._loop.call_soon_threadsafe(self._answer, probe)
-                except RuntimeError:  # the loop is closed: nothing left to watch
-                    return
-                if not self._wait_while_scheduled(probe):
-                    self._report(probe)
-                    self._wait_for(probe, None)
+            if self._deadline is None:
+                self._poll()
+            else:
+                self._wait_on(self._deadline)
         except Exception:  # a bug here must not pass silently
             self._log.exception("the loop watchdog failed; the loop is no longer watched")
+
+    def _wait_on(self, deadline: Timer) -> None:
+        """Sleep until the loop misses its beat by ``threshold``; report it then (Linux)."""
+        while True:
+            deadline.wait()  # in the kernel, without the GIL
+            if self._stopping:
+                return
+            self.wakes += 1
+            due = self._beat_at + self._period  # when the beat the loop missed fell due
+            queued = _waited(runqueue_wait(self._loop_native_id), self._beat_queued)
+            rest = due + self.threshold + queued - time.monotonic()
+            if rest > 0:  # it beat meanwhile, or its thread waited for a CPU: wait the rest
+                deadline.arm(rest)
+                continue
+            probe = _Probe(due, self._loop.time())
+            if not self._post(probe):
+                return
+            self._report(probe)
+            self._wait_for(probe, None)  # then its next beat arms the deadline again
+
+    def _poll(self) -> None:
+        """Look at the loop every ``threshold / 2``; probe it when busy (no kernel timers)."""
+        while self._rest(self._period):
+            if self._turning():
+                continue
+            probe = _Probe(time.monotonic(), self._loop.time())
+            self.probes += 1
+            if not self._post(probe):
+                return
+            if not self._wait_while_scheduled(probe):
+                self._report(probe)
+                self._wait_for(probe, None)
+
+    def _post(self, probe: _Probe) -> bool:
+        """Ask the loop to answer ``probe`` when it turns; False if the loop is closed."""
+        try:
+            self._loop.call_soon_threadsafe(self._answer, probe)
+        except RuntimeError:  # the loop is closed: nothing left to watch
+            return False
+        return True
 
     def _rest(self, seconds: float) -> bool:
         """Wait ``seconds``; False if asked to stop meanwhile."""
@@ -311,8 +397,7 @@ class BlockWatch:
         start = runqueue_wait(self._loop_native_id)
         budget = self.threshold
         while not self._wait_for(probe, budget):
-            now = runqueue_wait(self._loop_native_id)
-            queued = now - start if now is not None and start is not None else 0.0
+            queued = _waited(runqueue_wait(self._loop_native_id), start)
             budget = probe.posted + self.threshold + queued - time.monotonic()
             if budget <= 0:
                 return False
@@ -376,6 +461,11 @@ class BlockWatch:
             location,
             "".join(traceback.format_list(stack)),
         )
+
+
+def _waited(now: float | None, then: float | None) -> float:
+    """Seconds of waiting for a CPU between two `runqueue_wait` readings (0 if unknown)."""
+    return now - then if now is not None and then is not None else 0.0
 
 
 def _callback_frames(frame: FrameType | None) -> Iterator[FrameType]:
