@@ -314,3 +314,33 @@ def test_frame_a_to_b_to_a_round_trip(odom: Pose, base: Pose, p: Pose) -> None:
     in_odom = poses.inframe(in_map, "odom")
     assert poses.inframe(in_odom, "base_link").isclose(start, atol=TOL)
     assert poses.distance(in_map, start) == pytest.approx(0.0, abs=TOL)
+
+
+class Planar(Odometry):
+    """The same frames, read in the floor plane too (as the simulator's `get_planar`)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.planar_reads: list[str] = []
+
+    def get_planar(self, frame: str) -> tuple[float, float, float]:
+        self.planar_reads.append(frame)
+        (r0, _, _, x), (r1, _, _, y) = self.get_transform(frame)[:2].tolist()
+        return (x, y, math.atan2(r1, r0))
+
+
+@pytest.mark.parametrize("provider", [Odometry, Planar])
+def test_planar_gives_get_transform_s_floor_plane_numbers(provider: type[Odometry]) -> None:
+    odometry, poses, tree = provider(), PoseManager(), FrameTree()
+    odometry.base = Pose.from_euler(1.5, -2.0, 0.0, 0.0, 0.0, 2.5, "odom")
+    tree.set_transform("base_link", "arm", (0.2, 0.1, 0.4, 0.0, 0.0, -1.0))
+    poses.add_frame_provider(odometry)
+    poses.add_frame_provider(tree)
+    for frame in ("odom", "base_link", "arm", "map"):
+        (r0, _, _, x), (r1, _, _, y) = poses.get_transform(frame)[:2].tolist()
+        assert poses.planar(frame) == (x, y, math.atan2(r1, r0))  # exactly
+    assert poses.planar("base_link") == pytest.approx((1.5, -2.0, 2.5))
+    if isinstance(odometry, Planar):  # read directly where the provider knows the frame
+        assert odometry.planar_reads[:2] == ["odom", "base_link"]
+    with pytest.raises(UnknownFrameError, match="'gripper'"):
+        poses.planar("gripper")

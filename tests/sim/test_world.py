@@ -567,3 +567,13 @@ def test_mujoco_missing(monkeypatch: pytest.MonkeyPatch) -> None:
         '); install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
     )
     assert isinstance(caught.value, ImportError)
+
+
+def test_frame_planar_is_frame_transform_s_floor_plane_exactly(world: SimWorld) -> None:
+    world.set_command(0.3, 0.8)
+    world.step(200)  # somewhere off the dock, turned
+    for frame in world.frame_names:
+        (r0, _, _, x), (r1, _, _, y) = world.frame_transform(frame)[:2].tolist()
+        assert world.frame_planar(frame) == (x, y, math.atan2(r1, r0)), frame
+    with pytest.raises(UnknownFrameError, match="'gripper'"):
+        world.frame_planar("gripper")

@@ -62,6 +62,8 @@ def as_float(value: object) -> float | None:
         >>> as_float(3), as_float(True), as_float(float("nan")), as_float(10**400)
         (3.0, None, None, None)
     """
+    if type(value) is float:  # the common case, without the ABC check
+        return value if math.isfinite(value) else None
     if isinstance(value, bool) or not isinstance(value, Real):
         return None
     try:

@@ -173,6 +173,17 @@ class FrameTree:
             raise UnknownFrameError(msg)
         return matrix
 
+    def has(self, frame: str) -> bool:
+        """Whether ``frame`` is ``map`` or has a parent in this tree (`resolve` takes it).
+
+        Example:
+            >>> tree = FrameTree()
+            >>> tree.set_transform("base_link", "arm", (0.1, 0.0, 0.3))
+            >>> tree.has("arm"), tree.has("map"), tree.has("gripper")
+            (True, True, False)
+        """
+        return frame == MAP or frame in self._parents
+
     def frames(self) -> frozenset[str]:
         """Return ``map`` and every frame that has a parent in this tree."""
         return frozenset((MAP, *self._parents))

@@ -111,6 +111,39 @@ class PoseManager:
         """
         return self._to_map(frame_name(frame), ())
 
+    def planar(self, frame: str) -> tuple[float, float, float]:
+        """Return ``(x, y, yaw)`` of ``frame`` in ``map``: the floor-plane part of `get_transform`.
+
+        The very numbers `get_transform` gives (``x``, ``y`` of its
+        translation, ``yaw = atan2(m[1][0], m[0][0])``), without building the
+        4x4 array where the provider that knows the frame reads them directly
+        (an optional ``get_planar(frame)``, as the simulator's frames have):
+        what a recorder sampling the robot's pose at every tick needs.
+
+        Raises:
+            UnknownFrameError: No provider knows ``frame``.
+
+        Example:
+            >>> poses = PoseManager()
+            >>> tree = FrameTree()
+            >>> tree.set_transform("map", "base_link", (1.0, 2.0, 0.0, 0.0, 0.0, 0.5))
+            >>> poses.add_frame_provider(tree)
+            >>> [round(v, 6) for v in poses.planar("base_link")]
+            [1.0, 2.0, 0.5]
+        """
+        name = frame_name(frame)
+        for provider in self._providers:
+            read = getattr(provider, "get_planar", None)
+            if read is None:
+                break  # a provider without it: the general way, in the providers' order
+            try:
+                planar: tuple[float, float, float] = read(name)
+            except UnknownFrameError:
+                continue
+            return planar
+        (r0, _, _, x), (r1, _, _, y) = self.get_transform(name)[:2].tolist()
+        return (x, y, math.atan2(r1, r0))
+
     def get(self, raw: PoseLike, *, frame: str | None = None) -> Pose:
         """Read ``raw`` as a `Pose` in a frame that a provider knows.
 
@@ -272,10 +305,9 @@ class PoseManager:
             raise PoseError(msg)
         for provider in self._providers:
             if isinstance(provider, FrameTree):
-                try:
-                    top, matrix = provider.resolve(frame)
-                except UnknownFrameError:
+                if not provider.has(frame):  # (no error built for each frame it lacks)
                     continue
+                top, matrix = provider.resolve(frame)
                 return matrix if top == MAP else self._to_map(top, (*via, frame)) @ matrix
             try:
                 matrix = provider.get_transform(frame)

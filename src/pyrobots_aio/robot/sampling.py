@@ -56,6 +56,8 @@ class StateSampler:
     ) -> None:
         self._sink = sink
         self._watched = keys
+        # The watched keys in a fixed order: looked up in each write (a few of its many keys)
+        self._order = None if keys is None else tuple(sorted(keys))
         self._period = period
         self.pose_frame = pose_frame
         self._robot: Robot | None = None
@@ -94,18 +96,26 @@ class StateSampler:
         if robot is None or not changes:
             return
         now = robot.state.timestamp(next(iter(changes)))
-        watched, values, stamps, period = self._watched, self._values, self._stamps, self._period
+        values, stamps, period = self._values, self._stamps, self._period
         due: dict[str, object] = {}
-        for key, value in changes.items():
-            if watched is not None and key not in watched:
-                continue
+        order = self._order
+        items = (
+            changes.items()
+            if order is None
+            else [(key, changes[key]) for key in order if key in changes]
+        )
+        for key, value in items:
             old = values.get(key, _MISSING)
             if old is not _MISSING:
                 kind = type(value)
                 if kind is type(old) and kind in _SCALARS and old == value:
                     continue  # the same sample again
-                number = kind is not bool and isinstance(value, int | float)
-                if period and number and now - stamps[key] < period:
+                if (  # a number sampled less than a period ago (downsampling only)
+                    period
+                    and kind is not bool
+                    and isinstance(value, int | float)
+                    and now - stamps[key] < period
+                ):
                     continue
             values[key] = value
             stamps[key] = now
@@ -118,11 +128,9 @@ class StateSampler:
         if now - self._pose_stamp < self._period or self.pose_frame is None:
             return None
         try:
-            matrix = robot.poses.get_transform(self.pose_frame)
+            x, y, yaw = robot.poses.planar(self.pose_frame)
         except UnknownFrameError:
             return None
-        (r0, _, _, x), (r1, _, _, y) = matrix[:2].tolist()
-        yaw = math.atan2(r1, r0)
         old = self._pose
         if old is not None and (
             abs(old[0] - x) < POSE_EPSILON

@@ -27,6 +27,10 @@ class WorldFrames:
         """The 4x4 transform from ``frame`` to ``map``."""
         return self._world.frame_transform(frame)
 
+    def get_planar(self, frame: str) -> tuple[float, float, float]:
+        """``(x, y, yaw)`` of ``frame`` in ``map`` (`PoseManager.planar`), read directly."""
+        return self._world.frame_planar(frame)
+
     def frames(self) -> Collection[str]:
         """Every frame the simulator places."""
         return self._world.frame_names

@@ -99,10 +99,14 @@ def _planar(x: float, y: float, yaw: float) -> NDArray[np.float64]:
     return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 
+_LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
+
+
 def _matrix(pos: NDArray[np.float64], rot: NDArray[np.float64]) -> NDArray[np.float64]:
-    out = np.eye(4)
+    out = np.empty((4, 4))  # filled at once (the pose of the base is sampled every tick)
     out[:3, :3] = rot.reshape(3, 3)
     out[:3, 3] = pos
+    out[3] = _LAST_ROW
     return out
 
 
@@ -424,6 +428,27 @@ class SimWorld:
                 f"unknown frame {frame!r}; known frames: {sorted(self.frame_names)}"
             )
         return _matrix(self._data.site_xpos[index], self._data.site_xmat[index])
+
+    def frame_planar(self, frame: str) -> tuple[float, float, float]:
+        """Return ``(x, y, yaw)`` of one frame in the map: `frame_transform`'s floor-plane part.
+
+        The same numbers, read from the physics without building the matrix.
+
+        Raises:
+            UnknownFrameError: The world has no such frame.
+        """
+        data = self._data
+        if frame == "base_link":
+            pos, rot = data.xpos[self._layout.base_body], data.xmat[self._layout.base_body]
+        else:
+            index = self._layout.frame_sites.get(frame)
+            if index is None:  # odom (composed), or unknown: the matrix's way
+                (r0, _, _, x), (r1, _, _, y) = self.frame_transform(frame)[:2].tolist()
+                return (x, y, math.atan2(r1, r0))
+            pos, rot = data.site_xpos[index], data.site_xmat[index]
+        x, y, _ = pos.tolist()
+        r0, _, _, r1 = rot[:4].tolist()
+        return (x, y, math.atan2(r1, r0))
 
     def floor_plan(self) -> list[dict[str, Any]]:
         """Return the static shapes the robot can run into, seen from above, in the map frame.
