@@ -240,7 +240,11 @@ async def test_a_refused_cancel_is_logged_and_the_action_still_ends_cancelled(
         handle.cancel()
         assert await handle.wait_done() is Outcome.CANCELLED
         server.release.set()  # the server's goal went on; let it finish
-    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    warnings = [  # (the loop watchdog may report a stall of a loaded machine: not this test's)
+        r.getMessage()
+        for r in caplog.records
+        if r.levelno == logging.WARNING and r.name == "pyrobots_aio.ros2"
+    ]
     assert warnings == [
         "the action server of /fibonacci did not accept to cancel the goal "
         "(cancel response code 0, no goal canceling); it may go on"
