@@ -86,9 +86,9 @@ async def test_an_idle_loop_is_not_probed(mode: str) -> None:
     finally:
         watch.stop()
     assert watch.probes <= 1  # (one could catch the loop in the callback that wakes it)
-    if mode == "timers":  # the loop beat; the thread slept (a loaded machine: a wake or two)
-        assert watch.beats >= 10
-        assert watch.wakes <= 2
+    if mode == "timers":  # an idle loop stops beating at once; the thread looks instead
+        assert watch.beats <= 2
+        assert watch.wakes >= 10
     assert (watch.blocks, kept.events) == (0, [])
     assert set(os.listdir("/proc/self/fd")) == descriptors  # its timers are closed
 
@@ -113,6 +113,23 @@ async def test_a_busy_loop_that_turns_does_not_wake_the_thread(mode: str) -> Non
     if mode == "timers":  # polling looks 25 times and probes most; timers: the loop beats
         assert watch.beats >= 10
         assert watch.wakes <= 2
+
+
+@pytest.mark.asyncio
+async def test_a_loop_busy_after_idling_beats_again(mode: str) -> None:
+    watch, kept = _watch(0.02)
+    watch.start()
+    try:
+        await asyncio.sleep(0.3)  # idle: the beat stops, the thread looks
+        idle_beats, idle_wakes = watch.beats, watch.wakes
+        await _busy(0.5)  # busy: one look sees it (its CPU time), and it beats again
+    finally:
+        watch.stop()
+    assert (watch.blocks, kept.events) == (0, [])
+    if mode == "timers":
+        assert idle_beats <= 2
+        assert watch.beats - idle_beats >= 10
+        assert watch.wakes - idle_wakes <= 3  # (a loaded machine: a wake or two more)
 
 
 @pytest.mark.asyncio

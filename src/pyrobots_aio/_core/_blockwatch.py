@@ -76,6 +76,8 @@ if TYPE_CHECKING:
 
 DEFAULT_BLOCK_THRESHOLD = 0.1
 """Seconds the loop may go without turning before the watchdog reports it."""
+IDLE_SHARE = 0.2
+"""A loop busy less than this share of the time between two beats stops beating (Linux)."""
 MIN_BLOCK_THRESHOLD = 0.01
 """The smallest threshold: the thread looks twice per threshold, so less would cost CPU."""
 JOIN_BOUND = 5.0
@@ -237,7 +239,13 @@ class BlockWatch:
         self._beat_timer: Timer | None = None
         self._deadline: Timer | None = None
         self._beat_at = time.monotonic()
+        self._beat_cpu = 0.0
         self._beat_queued: float | None = None
+        self._beating = False  # the loop's side (while it is busy) or the thread's looks
+        try:  # the loop thread's CPU clock, for the thread to tell an idle loop from a busy one
+            self._loop_clock: int | None = time.pthread_getcpuclockid(self._loop_thread)
+        except (AttributeError, OSError):
+            self._loop_clock = None
         self._thread = threading.Thread(
             target=self._watch,
             name=f"pyrobots_aio loop watchdog of {threading.current_thread().name}",
@@ -260,8 +268,7 @@ class BlockWatch:
                 deadline.close()
             else:
                 self._beat_timer, self._deadline = beat, deadline
-                beat.arm(self._period, self._period)
-                self._beat(beat, deadline)
+                self._start_beating()
         self._thread.start()
 
     def stop(self) -> None:
@@ -287,13 +294,39 @@ class BlockWatch:
         for report in list(self._pending):
             self._ended(report)
 
+    def _start_beating(self) -> None:
+        """The loop is busy (or starts): it beats from now on, and the thread sleeps."""
+        beat, deadline = self._beat_timer, self._deadline
+        if self._beating or beat is None or deadline is None or self._stopping:
+            return
+        self._beating = True
+        self._beat_queued = runqueue_wait(self._loop_native_id)
+        self._beat_cpu = time.thread_time()
+        self._beat_at = time.monotonic()
+        beat.arm(self._period, self._period)
+        deadline.arm(self._period + self.threshold)
+
     def _beat(self, beat: Timer, deadline: Timer) -> None:
-        """The loop turns (the reader of ``beat``): push the deadline back."""
+        """The loop turns (the reader of ``beat``): push the deadline back.
+
+        A loop that was mostly idle since its last beat stops beating: waking
+        it for nothing would cost more than the thread's looks, which take the
+        GIL at once from an idle loop.
+        """
         beat.wait()  # the expiries so far (none if it was read already)
         self.beats += 1
+        now, cpu = time.monotonic(), time.thread_time()  # (this is the loop's thread)
+        busy = (cpu - self._beat_cpu) / max(now - self._beat_at, 1e-9)
         self._beat_queued = runqueue_wait(self._loop_native_id)
-        self._beat_at = time.monotonic()
+        self._beat_cpu, self._beat_at = cpu, now
+        if busy < IDLE_SHARE:
+            self._beating = False
+            beat.disarm()  # (the thread's looks start from this beat's figures)
         deadline.arm(self._period + self.threshold)
+
+    def _answer_and_beat(self, probe: _Probe) -> None:
+        self._answer(probe)
+        self._start_beating()
 
     def _answer(self, probe: _Probe) -> None:
         with self._cond:
@@ -343,6 +376,10 @@ class BlockWatch:
             if self._stopping:
                 return
             self.wakes += 1
+            if not self._beating:  # a loop that was idle: look at it
+                if not self._look_at_idle(deadline):
+                    return
+                continue
             due = self._beat_at + self._period  # when the beat the loop missed fell due
             queued = _waited(runqueue_wait(self._loop_native_id), self._beat_queued)
             rest = due + self.threshold + queued - time.monotonic()
@@ -350,10 +387,38 @@ class BlockWatch:
                 deadline.arm(rest)
                 continue
             probe = _Probe(due, self._loop.time())
-            if not self._post(probe):
+            if not self._post(probe, self._answer):
                 return
             self._report(probe)
             self._wait_for(probe, None)  # then its next beat arms the deadline again
+
+    def _look_at_idle(self, deadline: Timer) -> bool:
+        """Look at a loop that beats no more; False if it is closed.
+
+        Waiting in its selector: look again in ``threshold / 2``. Inside a
+        callback: probe it as polling does, and have it beat again (it is
+        busy) when it answers.
+        """
+        now, cpu = time.monotonic(), self._loop_cpu()
+        busy = (cpu - self._beat_cpu) / max(now - self._beat_at, 1e-9)
+        self._beat_cpu, self._beat_at = cpu, now
+        # A busy loop lets the GIL go only at its selects, where this thread gets it and
+        # finds it "turning": its CPU time tells it is busy (and must beat again).
+        if busy < IDLE_SHARE and self._turning():
+            deadline.arm(self._period)
+            return True
+        probe = _Probe(now, self._loop.time())
+        self.probes += 1
+        if not self._post(probe, self._answer_and_beat):
+            return False
+        if not self._wait_while_scheduled(probe):
+            self._report(probe)
+            self._wait_for(probe, None)
+        return True
+
+    def _loop_cpu(self) -> float:
+        """The loop thread's CPU time so far (0.0 if unknown: then it always looks idle)."""
+        return 0.0 if self._loop_clock is None else time.clock_gettime(self._loop_clock)
 
     def _poll(self) -> None:
         """Look at the loop every ``threshold / 2``; probe it when busy (no kernel timers)."""
@@ -362,16 +427,16 @@ class BlockWatch:
                 continue
             probe = _Probe(time.monotonic(), self._loop.time())
             self.probes += 1
-            if not self._post(probe):
+            if not self._post(probe, self._answer):
                 return
             if not self._wait_while_scheduled(probe):
                 self._report(probe)
                 self._wait_for(probe, None)
 
-    def _post(self, probe: _Probe) -> bool:
-        """Ask the loop to answer ``probe`` when it turns; False if the loop is closed."""
+    def _post(self, probe: _Probe, answer: Callable[[_Probe], None]) -> bool:
+        """Ask the loop to ``answer(probe)`` when it turns; False if the loop is closed."""
         try:
-            self._loop.call_soon_threadsafe(self._answer, probe)
+            self._loop.call_soon_threadsafe(answer, probe)
         except RuntimeError:  # the loop is closed: nothing left to watch
             return False
         return True

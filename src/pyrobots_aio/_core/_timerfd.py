@@ -99,9 +99,16 @@ class Timer:
 
         Re-arming forgets an expiry not read yet. ``seconds`` must be more than 0.
         """
+        self._set(max(seconds, 1e-9), period)  # 0 would disarm it
+
+    def disarm(self) -> None:
+        """Stop it: it expires no more until armed again."""
+        self._set(0.0, 0.0)
+
+    def _set(self, value: float, interval: float) -> None:
         spec = self._spec
-        spec.it_value = _spec(max(seconds, 1e-9))  # 0 would disarm it
-        spec.it_interval = _spec(period)
+        spec.it_value = _spec(value)
+        spec.it_interval = _spec(interval)
         if _LIBC is None or _LIBC.timerfd_settime(self.fd, 0, ctypes.byref(spec), None) < 0:
             errno = ctypes.get_errno()
             raise OSError(errno, os.strerror(errno))
