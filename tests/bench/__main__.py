@@ -45,7 +45,7 @@ GOALS: dict[str, tuple[str, Callable[[float], bool]]] = {
     "ros2_drive_to_wire_p99_ratio": ("<= 1.5x plain rclpy, p99", lambda v: v <= 1.5),
     "watchdog_report_delay_max_ms": ("100 ms block reported <= 200 ms", lambda v: v <= 200),
     "watchdog_idle_cpu_overhead_pct": ("<= 1 % CPU", lambda v: v <= 1),
-    "watchdog_busy_overhead_pct": ("<= 1 % CPU", lambda v: v <= 1),
+    "watchdog_busy_cpu_pct": ("<= 1 % CPU (counted directly)", lambda v: v <= 1),
 }
 
 

@@ -13,10 +13,15 @@ said otherwise; ``run()`` returns a flat dict:
 - ``watchdog_busy_overhead_pct``: the process CPU time of a busy workload
   (actions doing short pure-Python steps, never blocking), on over off, minus
   1, in % (median of `BUSY_ROUNDS` interleaved pairs, which of the two runs
-  first alternating); ``watchdog_thread_cpu_busy_pct``: the watchdog
-  thread's own CPU time over that workload's wall time (Linux: it sleeps in
-  the kernel while the loop turns), and ``watchdog_beats_per_s``: how often
-  the loop beat meanwhile (its side of the watch);
+  first alternating); on this shared 2-core machine the pairs scatter by a
+  few % either way, far more than the watchdog costs, so the goal is checked
+  on ``watchdog_busy_cpu_pct``: the CPU time the watchdog itself spends over
+  that workload's wall time, counted directly: the loop's beats (their
+  callbacks, timed on the loop thread's CPU clock) plus the watchdog thread's
+  own CPU time. ``watchdog_thread_cpu_busy_pct`` is the thread's part (Linux:
+  it sleeps in the kernel while the loop turns), ``watchdog_beats_per_s``
+  how often the loop beat meanwhile, and ``watchdog_beat_cpu_us`` what one
+  beat cost (the epoll wake-up that delivers it is not counted: a few µs);
 - ``watchdog_lockstep_walk_ratio``: the lockstep simulated random walk's
   speed (simulated seconds per wall second), on over off (median of
   interleaved pairs): virtual time must not be slowed.
@@ -30,8 +35,12 @@ import random
 import statistics
 import threading
 import time
+from unittest import mock
 
 from pyrobots_aio import Robot, action
+from pyrobots_aio._core._blockwatch import BlockWatch
+from pyrobots_aio._core._timerfd import Timer
+from pyrobots_aio.robot import _robot as robot_module
 from pyrobots_aio.sim import SimRobot
 from pyrobots_aio.sim import run as run_lockstep
 from pyrobots_aio.sim.random_walk import random_walk
@@ -111,18 +120,34 @@ async def _worker(robot: Robot, steps: int) -> None:
         await asyncio.sleep(0)
 
 
-async def _busy(threshold: float | None) -> tuple[float, float, float, int]:
-    """Process CPU s, wall s, the watchdog thread's CPU s, and the loop's beats (busy workload)."""
-    async with Robot(actions=[_worker], block_threshold=threshold) as robot:
-        thread = next((t for t in threading.enumerate() if "loop watchdog" in t.name), None)
-        clock = None if thread is None else time.pthread_getcpuclockid(thread.ident or 0)
-        own = 0.0 if clock is None else time.clock_gettime(clock)
-        cpu, wall = time.process_time(), time.perf_counter()
-        await asyncio.gather(*(robot._worker(BUSY_STEPS // 20) for _ in range(20)))
-        cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-        own = 0.0 if clock is None else time.clock_gettime(clock) - own
-        beats = 0 if robot._blockwatch is None else robot._blockwatch.beats
-    return cpu, wall, own, beats
+class _TimedBeats(BlockWatch):
+    """A watchdog whose beats add up the loop thread's CPU time they take."""
+
+    spent = 0.0
+
+    def _beat(self, beat: Timer, deadline: Timer) -> None:
+        cpu = time.thread_time()
+        super()._beat(beat, deadline)
+        _TimedBeats.spent += time.thread_time() - cpu
+
+
+async def _busy(threshold: float | None) -> tuple[float, float, float, float, int]:
+    """Process CPU s, wall s, the watchdog thread's and the beats' CPU s, and the beats."""
+    with mock.patch.object(robot_module, "BlockWatch", _TimedBeats):
+        async with Robot(actions=[_worker], block_threshold=threshold) as robot:
+            watch = robot._blockwatch
+            thread = next((t for t in threading.enumerate() if "loop watchdog" in t.name), None)
+            clock = None if thread is None else time.pthread_getcpuclockid(thread.ident or 0)
+            own = 0.0 if clock is None else time.clock_gettime(clock)
+            beats = 0 if watch is None else watch.beats
+            _TimedBeats.spent = 0.0
+            cpu, wall = time.process_time(), time.perf_counter()
+            await asyncio.gather(*(robot._worker(BUSY_STEPS // 20) for _ in range(20)))
+            cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+            own = 0.0 if clock is None else time.clock_gettime(clock) - own
+            beats = 0 if watch is None else watch.beats - beats
+            spent = _TimedBeats.spent
+    return cpu, wall, own, spent, beats
 
 
 async def _walk(threshold: float | None) -> float:
@@ -134,18 +159,22 @@ async def _walk(threshold: float | None) -> float:
 
 
 def _busy_pairs() -> dict[str, float]:
-    busy, thread, beats = [], [], []
+    busy, own_cpu, thread, beats, beat_cost = [], [], [], [], []
     for round_ in range(BUSY_ROUNDS):
         first, second = (0.1, None) if round_ % 2 == 0 else (None, 0.1)
         runs = {first: asyncio.run(_busy(first)), second: asyncio.run(_busy(second))}
-        (cpu_on, wall_on, own, beaten), (cpu_off, *_) = runs[0.1], runs[None]
+        (cpu_on, wall_on, own, spent, beaten), (cpu_off, *_) = runs[0.1], runs[None]
         busy.append((cpu_on / cpu_off - 1) * 100)
+        own_cpu.append((own + spent) / wall_on * 100)
         thread.append(own / wall_on * 100)
         beats.append(beaten / wall_on)
+        beat_cost.append(spent / max(beaten, 1) * 1e6)
     return {
         "watchdog_busy_overhead_pct": statistics.median(busy),
+        "watchdog_busy_cpu_pct": statistics.median(own_cpu),
         "watchdog_thread_cpu_busy_pct": statistics.median(thread),
         "watchdog_beats_per_s": statistics.median(beats),
+        "watchdog_beat_cpu_us": statistics.median(beat_cost),
     }
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
+import subprocess
+import sys
 import threading
 import time
 from typing import TYPE_CHECKING
@@ -18,7 +20,7 @@ import pytest
 
 from pyrobots_aio import EventKind, ExecEvent
 from pyrobots_aio._core import _blockwatch
-from pyrobots_aio._core._blockwatch import Blocker, BlockWatch, runqueue_wait
+from pyrobots_aio._core._blockwatch import Blocker, BlockWatch, RunQueue
 from pyrobots_aio._core._instrument import Instruments
 from pyrobots_aio._core._logging import LogScope
 
@@ -177,16 +179,34 @@ async def test_a_failure_of_the_watchdog_itself_is_logged_not_silent(warned: War
     assert isinstance(record.exc_info[1], LookupError)
 
 
-def test_runqueue_wait_reads_this_threads_wait_for_a_cpu() -> None:
-    me = threading.get_native_id()
-    first = runqueue_wait(me)
-    assert first is not None  # Linux: the scheduler's statistics
-    assert first >= 0.0
-    sum(range(2_000_000))  # run a while
-    second = runqueue_wait(me)
-    assert second is not None
-    assert second >= first
-    assert runqueue_wait(2**31 - 1) is None  # no such thread
+def test_the_run_queue_reads_this_threads_wait_for_a_cpu_from_a_kept_file() -> None:
+    queue = RunQueue(threading.get_native_id())
+    cpus = os.sched_getaffinity(0)
+    cpu = min(cpus)
+    # A busy process on this thread's only CPU: the thread waits for it, and the figure grows.
+    rival = subprocess.Popen(
+        [sys.executable, "-c", f"import os; os.sched_setaffinity(0, {{{cpu}}})\nwhile True: pass"]
+    )
+    try:
+        initial = queue.waited()
+        assert initial is not None  # Linux: the scheduler's statistics
+        assert initial >= 0.0
+        os.sched_setaffinity(0, {cpu})  # (this thread only)
+        last, end = initial, time.monotonic() + 0.5
+        while time.monotonic() < end:  # the same file, read again: fresh figures each time
+            sum(range(20_000))
+            now = queue.waited()
+            assert now is not None
+            assert now >= last
+            last = now
+        assert last > initial
+    finally:
+        os.sched_setaffinity(0, cpus)
+        rival.kill()
+        rival.wait()
+        queue.close()
+    assert queue.waited() is None  # closed
+    assert RunQueue(2**31 - 1).waited() is None  # no such thread
 
 
 @pytest.mark.parametrize("queued", [True, False], ids=["waiting-for-a-cpu", "blocking"])
@@ -198,10 +218,10 @@ async def test_time_the_loop_waits_for_a_cpu_is_not_a_block(
     # "waits for a CPU", its wait grows with the wall clock, and no block is reported.
     origin = time.monotonic()
 
-    def waited(native_id: int) -> float:
+    def waited(self: RunQueue) -> float:
         return time.monotonic() - origin if queued else 0.0
 
-    monkeypatch.setattr(_blockwatch, "runqueue_wait", waited)
+    monkeypatch.setattr(_blockwatch.RunQueue, "waited", waited)
     watch, kept = _watch(0.05)
     watch.start()
     try:

@@ -53,6 +53,7 @@ timer's order.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import sys
 import sysconfig
@@ -84,17 +85,45 @@ JOIN_BOUND = 5.0
 """Seconds `BlockWatch.stop` waits for the thread (only a stuck log handler could need it)."""
 
 
-def runqueue_wait(native_id: int) -> float | None:
-    """Seconds thread ``native_id`` of this process has waited for a CPU so far (None: unknown).
+class RunQueue:
+    """How long a thread of this process has waited for a CPU so far (Linux).
 
-    Linux's scheduler statistics: the second field of the thread's
-    ``schedstat`` (nanoseconds spent runnable but not running).
+    The scheduler's statistics: the second field of the thread's
+    ``schedstat`` (nanoseconds spent runnable but not running), read from a
+    file kept open (about 1 µs a read; opening it each time costs ten times
+    that, and a loop's beat reads it).
+
+    Example:
+        >>> import threading
+        >>> queue = RunQueue(threading.get_native_id())
+        >>> waited = queue.waited()
+        >>> waited is None or waited >= 0.0
+        True
+        >>> queue.close()
+        >>> queue.waited() is None
+        True
     """
-    try:
-        with open(f"/proc/self/task/{native_id}/schedstat", encoding="ascii") as stats:
-            return int(stats.read().split()[1]) / 1e9
-    except (OSError, IndexError, ValueError):
-        return None
+
+    def __init__(self, native_id: int | None) -> None:
+        self._fd: int | None = None
+        if native_id is not None:  # (None: closed from the start)
+            with contextlib.suppress(OSError):  # not Linux, or no such thread
+                self._fd = os.open(f"/proc/self/task/{native_id}/schedstat", os.O_RDONLY)
+
+    def waited(self) -> float | None:
+        """Seconds the thread has waited for a CPU so far (None: unknown, or closed)."""
+        if self._fd is None:
+            return None
+        try:
+            return int(os.pread(self._fd, 64, 0).split()[1]) / 1e9
+        except (OSError, IndexError, ValueError):
+            return None
+
+    def close(self) -> None:
+        """Close the file (`waited` answers None from then on)."""
+        fd, self._fd = self._fd, None
+        if fd is not None:
+            os.close(fd)
 
 
 _RUN_ONCE = base_events.BaseEventLoop._run_once.__code__  # type: ignore[attr-defined]  # one iteration
@@ -241,6 +270,7 @@ class BlockWatch:
         self._beat_at = time.monotonic()
         self._beat_cpu = 0.0
         self._beat_queued: float | None = None
+        self._queue = RunQueue(None)  # opened by start(), closed by stop()
         self._beating = False  # the loop's side (while it is busy) or the thread's looks
         try:  # the loop thread's CPU clock, for the thread to tell an idle loop from a busy one
             self._loop_clock: int | None = time.pthread_getcpuclockid(self._loop_thread)
@@ -256,6 +286,7 @@ class BlockWatch:
 
     def start(self) -> None:
         """Start the beat (where there are kernel timers) and the thread."""
+        self._queue = RunQueue(self._loop_native_id)
         try:
             beat, deadline = Timer(blocking=False), Timer()
         except OSError:  # not Linux: the thread polls
@@ -288,9 +319,11 @@ class BlockWatch:
                 "the loop watchdog thread did not stop within %s s (a log handler stuck?)",
                 JOIN_BOUND,
             )
-        elif deadline is not None and beat is not None:  # the thread reads the deadline no more
-            beat.close()
-            deadline.close()
+        else:  # the thread reads the deadline and the run queue no more
+            self._queue.close()
+            if deadline is not None and beat is not None:
+                beat.close()
+                deadline.close()
         for report in list(self._pending):
             self._ended(report)
 
@@ -300,7 +333,7 @@ class BlockWatch:
         if self._beating or beat is None or deadline is None or self._stopping:
             return
         self._beating = True
-        self._beat_queued = runqueue_wait(self._loop_native_id)
+        self._beat_queued = self._queue.waited()
         self._beat_cpu = time.thread_time()
         self._beat_at = time.monotonic()
         beat.arm(self._period, self._period)
@@ -317,12 +350,14 @@ class BlockWatch:
         self.beats += 1
         now, cpu = time.monotonic(), time.thread_time()  # (this is the loop's thread)
         busy = (cpu - self._beat_cpu) / max(now - self._beat_at, 1e-9)
-        self._beat_queued = runqueue_wait(self._loop_native_id)
+        self._beat_queued = self._queue.waited()
         self._beat_cpu, self._beat_at = cpu, now
-        if busy < IDLE_SHARE:
+        if busy < IDLE_SHARE:  # the thread looks from now on, the first time in half a threshold
             self._beating = False
-            beat.disarm()  # (the thread's looks start from this beat's figures)
-        deadline.arm(self._period + self.threshold)
+            beat.disarm()
+            deadline.arm(self._period)
+        else:
+            deadline.arm(self._period + self.threshold)
 
     def _answer_and_beat(self, probe: _Probe) -> None:
         self._answer(probe)
@@ -381,7 +416,7 @@ class BlockWatch:
                     return
                 continue
             due = self._beat_at + self._period  # when the beat the loop missed fell due
-            queued = _waited(runqueue_wait(self._loop_native_id), self._beat_queued)
+            queued = _waited(self._queue.waited(), self._beat_queued)
             rest = due + self.threshold + queued - time.monotonic()
             if rest > 0:  # it beat meanwhile, or its thread waited for a CPU: wait the rest
                 deadline.arm(rest)
@@ -459,10 +494,10 @@ class BlockWatch:
         False: no answer though the loop thread could run (or slept) for
         ``threshold`` since the probe was posted.
         """
-        start = runqueue_wait(self._loop_native_id)
+        start = self._queue.waited()
         budget = self.threshold
         while not self._wait_for(probe, budget):
-            queued = _waited(runqueue_wait(self._loop_native_id), start)
+            queued = _waited(self._queue.waited(), start)
             budget = probe.posted + self.threshold + queued - time.monotonic()
             if budget <= 0:
                 return False
@@ -529,7 +564,7 @@ class BlockWatch:
 
 
 def _waited(now: float | None, then: float | None) -> float:
-    """Seconds of waiting for a CPU between two `runqueue_wait` readings (0 if unknown)."""
+    """Seconds of waiting for a CPU between two `RunQueue.waited` readings (0 if unknown)."""
     return now - then if now is not None and then is not None else 0.0
 
 
