@@ -9,6 +9,8 @@ benchmark, not a test). ``run()`` returns them in a flat dict:
 - ``idle_cpu_s_per_s_1000_monitors``: CPU time per second while 1,000
   monitors watch a state that does not change;
 - ``writes_per_s_*``: state write throughput with 1,000 monitors attached;
+- ``unsubscribe_us_each_*``: closing every one of that many subscriptions
+  of one key, per subscription (it should not grow with their number);
 - ``py_trees_*``: a py_trees tree with the same condition ticking at 10 Hz and
   as fast as it can, under the same writer as ``events_harness_*`` (skipped,
   with ``py_trees_available`` 0, when py_trees is not installed).
@@ -254,6 +256,18 @@ async def _py_trees(mode: str, period: float, samples: int) -> dict[str, float]:
     }
 
 
+async def _unsubscribe(robot: Robot) -> dict[str, float]:
+    figures = {}
+    for count in (100, 10_000):
+        subs = [robot.state.subscribe(len, keys="crowded") for _ in range(count)]
+        robot.state.crowded = 0  # (a snapshot of the crowd is taken)
+        start = time.perf_counter()
+        for sub in subs:
+            sub.close()
+        figures[f"unsubscribe_us_each_{count}"] = (time.perf_counter() - start) / count * 1e6
+    return figures
+
+
 async def _side_by_side(robot: Robot) -> dict[str, float]:
     figures = await _events_harness(robot, HARNESS["10hz"][1])
     try:
@@ -267,8 +281,9 @@ async def _side_by_side(robot: Robot) -> dict[str, float]:
 
 async def _main() -> dict[str, float]:
     figures: dict[str, float] = {}
-    async with Robot() as robot:
-        for part in (_latencies, _pulses, _idle, _throughput, _side_by_side):
+    # No loop watchdog: the parts that build or tear down thousands of monitors block on purpose.
+    async with Robot(block_threshold=None) as robot:
+        for part in (_latencies, _pulses, _idle, _throughput, _unsubscribe, _side_by_side):
             figures.update(await part(robot))
     return figures
 

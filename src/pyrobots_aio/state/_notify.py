@@ -1,8 +1,10 @@
 """Change notification for the state store: subscriptions and their per-key index.
 
 Writes cost O(subscribers of the written key): every-key subscribers sit in
-one tuple, the others in a tuple per key. The tuples are copied on write, so
-a notification in progress iterates a snapshot whatever (un)subscribes meanwhile.
+one group, the others in a group per key. A group is an ordered set (O(1) to
+join and leave, so closing a thousand monitors of one key is not quadratic)
+with a tuple snapshot made when a write first needs it: a notification in
+progress iterates its snapshot whatever (un)subscribes meanwhile.
 A batch write finds its subscribers through a routing table cached per key
 sequence, so the same couple of dozen keys written every control tick cost a
 lookup, not a pass over every key.
@@ -86,14 +88,42 @@ class Subscription:
             _log.exception("state subscriber %r failed on a write of %s", self, sorted(changes))
 
 
+class _Group:
+    """The subscriptions of one key (or of every key), in subscription order."""
+
+    __slots__ = ("_members", "_snapshot")
+
+    def __init__(self) -> None:
+        self._members: dict[Subscription, None] = {}
+        self._snapshot: tuple[Subscription, ...] | None = ()
+
+    def __bool__(self) -> bool:
+        return bool(self._members)
+
+    def add(self, sub: Subscription) -> None:
+        self._members[sub] = None
+        self._snapshot = None
+
+    def discard(self, sub: Subscription) -> None:
+        self._members.pop(sub, None)
+        self._snapshot = None
+
+    def snapshot(self) -> tuple[Subscription, ...]:
+        """The members now, as a tuple kept until the next change."""
+        snapshot = self._snapshot
+        if snapshot is None:
+            snapshot = self._snapshot = tuple(self._members)
+        return snapshot
+
+
 class SubscriberIndex:
     """The subscriptions of one store, indexed by key, and their in-order delivery."""
 
     __slots__ = ("_by_key", "_every", "_notifying", "_orders", "_pending", "_routes")
 
     def __init__(self) -> None:
-        self._every: tuple[Subscription, ...] = ()
-        self._by_key: dict[str, tuple[Subscription, ...]] = {}
+        self._every = _Group()
+        self._by_key: dict[str, _Group] = {}
         self._routes: dict[tuple[str, ...], _Routes] = {}
         self._orders = itertools.count()
         self._notifying = False
@@ -105,28 +135,33 @@ class SubscriberIndex:
         sub = Subscription(self, callback, watched, next(self._orders))
         self._routes.clear()
         if watched is None:
-            self._every = (*self._every, sub)
+            self._every.add(sub)
         else:
             for key in watched:
-                self._by_key[key] = (*self._by_key.get(key, ()), sub)
+                group = self._by_key.get(key)
+                if group is None:
+                    group = self._by_key[key] = _Group()
+                group.add(sub)
         return sub
 
     def remove(self, sub: Subscription) -> None:
-        """Unregister ``sub`` (copy-on-write: running notifications keep their snapshot)."""
+        """Unregister ``sub`` (running notifications keep their snapshot)."""
         self._routes.clear()
         if sub.keys is None:
-            self._every = tuple(s for s in self._every if s is not sub)
+            self._every.discard(sub)
             return
         for key in sub.keys:
-            rest = tuple(s for s in self._by_key[key] if s is not sub)
-            if rest:
-                self._by_key[key] = rest
-            else:
+            group = self._by_key[key]
+            group.discard(sub)
+            if not group:
                 del self._by_key[key]
 
     def notify(self, key: str, value: Any) -> None:
         """Tell the subscribers of ``key`` that ``value`` was written."""
-        subs = self._every + self._by_key.get(key, ())
+        subs = self._every.snapshot()
+        group = self._by_key.get(key)
+        if group is not None:
+            subs += group.snapshot()
         if subs:
             self._run([(subs, MappingProxyType({key: value}))])
 
@@ -136,8 +171,9 @@ class SubscriberIndex:
         if routes is None:
             routes = self._route(keys)
         deliveries: list[_Delivery] = []
-        if self._every:
-            deliveries.append((self._every, MappingProxyType(changes)))
+        every = self._every.snapshot()
+        if every:
+            deliveries.append((every, MappingProxyType(changes)))
         for sub, watched in routes:
             mine = {key: changes[key] for key in watched}
             deliveries.append(((sub,), MappingProxyType(mine)))
@@ -152,7 +188,8 @@ class SubscriberIndex:
         """
         per_sub: dict[Subscription, list[str]] = {}
         for key in keys:
-            for sub in self._by_key.get(key, ()):
+            group = self._by_key.get(key)
+            for sub in () if group is None else group.snapshot():
                 per_sub.setdefault(sub, []).append(key)
         ordered = sorted(per_sub, key=lambda s: s._order)
         routes = tuple((sub, tuple(per_sub[sub])) for sub in ordered)
