@@ -1,6 +1,8 @@
 from __future__ import annotations
 
 import asyncio
+import copy
+import dataclasses
 import logging
 import types
 from collections.abc import Callable
@@ -12,6 +14,7 @@ from pyrobots_aio import (
     ActionDefinitionError,
     ActionError,
     ActionHandle,
+    ActionInfo,
     ActionState,
     EventKind,
     ExecEvent,
@@ -366,6 +369,32 @@ async def test_instruments_see_every_action_event() -> None:
     assert recorder.events[2].data == {"reason": "bored", "by": None}
     assert recorder.events[3].data == {"outcome": "cancelled", "error": None}
     assert {e.action for e in recorder.events} == {handle.id}
+
+
+@pytest.mark.asyncio
+async def test_a_snapshot_is_the_same_frozen_value_its_constructor_makes() -> None:
+    async with Robot() as robot:
+        handle = forever(robot)
+        await robot.sleep(1)
+        handle.cancel("enough")  # (a reason to copy; the snapshot is taken before it ends)
+        info = ActionInfo.of(handle)
+        built = ActionInfo(
+            handle,
+            handle.state,
+            handle.started_at,
+            handle.held,
+            handle.awaiting,
+            handle.cancel_reason,
+        )
+        assert info == built
+        assert repr(info) == repr(built)
+        assert (info.state, info.cancel_reason) == (ActionState.CANCELLING, "enough")
+        assert info.location == built.location
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            info.state = ActionState.DONE  # type: ignore[misc]
+        assert dataclasses.replace(info, held=("wheels",)).held == ("wheels",)
+        assert copy.copy(info) == info
+        await handle.wait_done()
 
 
 @pytest.mark.asyncio
