@@ -92,6 +92,7 @@ class StateSampler:
         self._robot = None
 
     def _on_write(self, changes: Mapping[str, object]) -> None:
+        # Runs at every write of the state (every control tick of a simulated robot).
         robot = self._robot
         if robot is None or not changes:
             return
@@ -99,12 +100,10 @@ class StateSampler:
         values, stamps, period = self._values, self._stamps, self._period
         due: dict[str, object] = {}
         order = self._order
-        items = (
-            changes.items()
-            if order is None
-            else [(key, changes[key]) for key in order if key in changes]
-        )
-        for key, value in items:
+        for key in changes if order is None else order:
+            value = changes.get(key, _MISSING)
+            if value is _MISSING:  # a watched key this write does not have
+                continue
             old = values.get(key, _MISSING)
             if old is not _MISSING:
                 kind = type(value)
@@ -118,28 +117,25 @@ class StateSampler:
                 ):
                     continue
             values[key] = value
-            stamps[key] = now
+            if period:
+                stamps[key] = now
             due[key] = value
-        pose = self._pose_due(robot, now) if self.pose_frame is not None else None
+        pose = None
+        frame = self.pose_frame
+        if frame is not None and now - self._pose_stamp >= period:
+            try:
+                x, y, yaw = robot.poses.planar(frame)
+            except UnknownFrameError:
+                pass
+            else:
+                old_pose = self._pose
+                if (
+                    old_pose is None
+                    or abs(old_pose[0] - x) >= POSE_EPSILON
+                    or abs(old_pose[1] - y) >= POSE_EPSILON
+                    or abs(old_pose[2] - yaw) >= POSE_EPSILON
+                ) and (x - x) + (y - y) + (yaw - yaw) == 0.0:  # moved, and finite
+                    pose = self._pose = (x, y, yaw)
+                    self._pose_stamp = now
         if due or pose is not None:
             self._sink(now, due, pose)
-
-    def _pose_due(self, robot: Robot, now: float) -> Pose2D | None:
-        if now - self._pose_stamp < self._period or self.pose_frame is None:
-            return None
-        try:
-            x, y, yaw = robot.poses.planar(self.pose_frame)
-        except UnknownFrameError:
-            return None
-        old = self._pose
-        if old is not None and (
-            abs(old[0] - x) < POSE_EPSILON
-            and abs(old[1] - y) < POSE_EPSILON
-            and abs(old[2] - yaw) < POSE_EPSILON
-        ):
-            return None  # still
-        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
-            return None
-        pose = self._pose = (x, y, yaw)
-        self._pose_stamp = now
-        return pose

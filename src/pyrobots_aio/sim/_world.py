@@ -155,6 +155,8 @@ class SimWorld:
         self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
         self._mujoco, self._model, self._data = mujoco, model, mujoco.MjData(model)
         self._sensordata, self._ctrl = self._data.sensordata, self._data.ctrl  # views, fetched once
+        body = self._layout.base_body  # the base's position and the first row of its rotation
+        self._base_xpos, self._base_xmat = self._data.xpos[body], self._data.xmat[body, :4]
         self._path, self._seed, self._dt = path, seed, physics_dt
         self._readings: list[float] = []  # sensordata of the current state, as floats
         self._is_docked = False  # of the current state
@@ -437,17 +439,16 @@ class SimWorld:
         Raises:
             UnknownFrameError: The world has no such frame.
         """
-        data = self._data
-        if frame == "base_link":
-            pos, rot = data.xpos[self._layout.base_body], data.xmat[self._layout.base_body]
-        else:
-            index = self._layout.frame_sites.get(frame)
-            if index is None:  # odom (composed), or unknown: the matrix's way
-                (r0, _, _, x), (r1, _, _, y) = self.frame_transform(frame)[:2].tolist()
-                return (x, y, math.atan2(r1, r0))
-            pos, rot = data.site_xpos[index], data.site_xmat[index]
-        x, y, _ = pos.tolist()
-        r0, _, _, r1 = rot[:4].tolist()
+        if frame == "base_link":  # (the recorders' frame, at every tick)
+            x, y, _ = self._base_xpos.tolist()
+            r0, _, _, r1 = self._base_xmat.tolist()
+            return (x, y, math.atan2(r1, r0))
+        index = self._layout.frame_sites.get(frame)
+        if index is None:  # odom (composed), or unknown: the matrix's way
+            (r0, _, _, x), (r1, _, _, y) = self.frame_transform(frame)[:2].tolist()
+            return (x, y, math.atan2(r1, r0))
+        x, y, _ = self._data.site_xpos[index].tolist()
+        r0, _, _, r1 = self._data.site_xmat[index, :4].tolist()
         return (x, y, math.atan2(r1, r0))
 
     def floor_plan(self) -> list[dict[str, Any]]:
