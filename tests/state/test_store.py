@@ -315,6 +315,25 @@ def test_batch_update_notifies_each_subscriber_once_with_its_keys() -> None:
     assert other.calls == []
 
 
+def test_write_owned_is_a_batch_update_of_the_dict_given_up() -> None:
+    store = _store(a=0, b=0)
+    every, some = Recorder(), Recorder()
+    store.subscribe(every)
+    store.subscribe(some, keys="b")
+    version = store.version()
+    store.write_owned({})  # nothing written
+    assert store.version() == version
+    store.write_owned({"a": 1, "b": 2, "new": 3})
+    assert (store.a, store.b, store.new, store.version()) == (1, 2, 3, version + 1)
+    assert every.calls == [{"a": 1, "b": 2, "new": 3}]
+    assert some.calls == [{"b": 2}]
+    assert store.timestamp("a") == store.timestamp("new")
+    with pytest.raises(TypeError, match="state keys are strings, got 1"):
+        store.write_owned({1: "one"})  # type: ignore[dict-item]
+    assert 1 not in dict(store)  # nothing of a refused write is kept
+    assert store.version() == version + 1
+
+
 def test_per_key_subscription_sees_only_its_keys() -> None:
     store = _store()
     bumper = Recorder()

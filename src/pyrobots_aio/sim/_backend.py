@@ -76,7 +76,7 @@ class SimBackend:
         self._robot, self._loop = robot, loop
         # The world's clock reads the loop's (the physics pauses between runs).
         self.world.set_time(loop.time())
-        robot.state.update(self.world.read_sensors())
+        robot.state.write_owned(self.world.read_sensors())
         self.ticks = 0
         self._schedule(loop)
 
@@ -112,7 +112,7 @@ class SimBackend:
         self.ticks += 1
         self.world.step(self.steps_per_tick)
         self._schedule(loop)
-        robot.state.update(self.world.read_sensors())
+        robot.state.write_owned(self.world.read_sensors())
         if self._controllers:
             self._run_controllers()
 

@@ -281,6 +281,20 @@ class StateStore(Mapping[str, Any]):
         changes: dict[str, Any] = {} if mapping is None else dict(mapping)
         if values:
             changes.update(values)
+        self.write_owned(changes)
+
+    def write_owned(self, changes: dict[str, Any]) -> None:
+        """`update` with a dict the caller gives up: it is kept as it is, not copied.
+
+        For backends writing a fresh dict of readings at every control tick;
+        the caller must not change ``changes`` afterwards.
+
+        Example:
+            >>> store = StateStore(clock=lambda: 0.0)
+            >>> store.write_owned({"v": 0.25, "w": 0.0})
+            >>> store.v, store.version()
+            (0.25, 1)
+        """
         if not changes:
             return
         if not changes.keys() <= self._values.keys():  # known keys are strings already
