@@ -3,7 +3,8 @@
 A real-time robot spends most of its time waiting for the next control tick, so
 a signal that lands at a bad moment is rare in any one run: each test runs the
 program many times (a few at once, which also varies the timing), signals it
-after a random delay, and a second time after a random gap of 0 to 300 ms. The
+after a random delay, and a second time after a random gap of 0 to 300 ms (and
+not before the first was delivered: two pending signals of one kind merge). The
 processes get a generous hang guard: the point is that they end at all, and
 before the cleanup they were interrupted in would have ended by itself.
 """
@@ -15,8 +16,10 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
@@ -26,7 +29,6 @@ from pyrobots_aio.recording import load
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
-    from pathlib import Path
 
     from pyrobots_aio.recording import Recording
 
@@ -113,11 +115,15 @@ def _signalled(
         assert child.stdout is not None
         first = child.stdout.readline()  # the robot runs
         waits = [delay] + [gap] * (len(signals) - 1)
+        sent: signal.Signals | None = None
         for wait, signum in zip(waits, signals, strict=True):
             try:
                 child.wait(timeout=wait)  # a pause, unless it ended already
             except subprocess.TimeoutExpired:
+                if sent is not None:
+                    _wait_delivered(child, sent)
                 child.send_signal(signum)
+                sent = signum
         try:
             out, err = child.communicate(timeout=HANG_GUARD)
             code: int | None = child.returncode
@@ -126,6 +132,31 @@ def _signalled(
             out, err = child.communicate()
             code = None
     return Run(tuple(signals), delay, gap, code, first + out, err, path)
+
+
+def _wait_delivered(child: subprocess.Popen[str], signum: signal.Signals) -> None:
+    """Wait until ``signum`` sent to ``child`` is no longer pending in the kernel.
+
+    Signals of one kind do not queue: a second one sent while the first is
+    still pending (its process not scheduled yet, on a loaded machine) merges
+    with it, and the process sees one. So a second signal is sent only once
+    the first was delivered, whatever the gap.
+    """
+    bit = 1 << (signum - 1)
+    deadline = time.monotonic() + HANG_GUARD
+    while time.monotonic() < deadline and child.poll() is None:
+        try:
+            masks = [
+                int(line.split()[1], 16)
+                for status in Path(f"/proc/{child.pid}/task").glob("*/status")
+                for line in status.read_text().splitlines()
+                if line.startswith(("SigPnd:", "ShdPnd:"))
+            ]
+        except OSError:  # it is ending
+            return
+        if not any(mask & bit for mask in masks):
+            return
+        time.sleep(0.001)
 
 
 def _many(
