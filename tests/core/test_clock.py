@@ -227,6 +227,46 @@ def test_socket_io_is_served_without_advancing_virtual_time() -> None:
     assert run(main) == (b"ping\n", 0.0)
 
 
+def test_skip_ahead_moves_time_on_only_when_nothing_would_run_before() -> None:
+    async def main() -> list[tuple[bool, float]]:
+        loop = asyncio.get_running_loop()
+        assert isinstance(loop, VirtualTimeLoop)
+        seen = [(loop.skip_ahead(1.0), loop.time())]  # nothing to do before t = 1
+        seen.append((loop.skip_ahead(0.5), loop.time()))  # never backwards
+        handle = loop.call_soon(lambda: None)  # a callback is ready
+        seen.append((loop.skip_ahead(2.0), loop.time()))
+        handle.cancel()
+        await asyncio.sleep(0)
+        timer = loop.call_at(3.0, lambda: None)  # a timer falls due at 3
+        seen.append((loop.skip_ahead(3.0), loop.time()))
+        seen.append((loop.skip_ahead(2.5), loop.time()))  # before it: fine
+        timer.cancel()
+        await asyncio.sleep(0)
+        release = threading.Event()
+        job = loop.run_in_executor(None, release.wait)  # a thread job holds time
+        seen.append((loop.skip_ahead(4.0), loop.time()))
+        release.set()
+        await job
+        loop.stop()  # a stopping loop must turn (stop() takes effect after this iteration)
+        seen.append((loop.skip_ahead(5.0), loop.time()))
+        return seen
+
+    loop = VirtualTimeLoop()
+    try:
+        seen = loop.run_until_complete(main())
+    finally:
+        loop.close()
+    assert seen == [
+        (True, 1.0),
+        (True, 1.0),
+        (False, 1.0),
+        (False, 1.0),
+        (True, 2.5),
+        (False, 2.5),
+        (False, 2.5),
+    ]
+
+
 def test_run_passes_arguments_and_returns_the_result() -> None:
     async def add(a: int, b: int) -> int:
         await asyncio.sleep(1)

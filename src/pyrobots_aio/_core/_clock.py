@@ -196,6 +196,33 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
         ready: deque[asyncio.Handle] = self._ready  # type: ignore[attr-defined]
         return [handle for handle in ready if not handle.cancelled()]
 
+    def skip_ahead(self, when: float) -> bool:
+        """Move virtual time on to ``when`` now if nothing would run before; tell whether it did.
+
+        For a callback that would only schedule itself again at ``when`` (the
+        simulator's control tick) and can go on at once instead: True if no
+        callback is ready, no timer is due at or before ``when``, no thread job
+        runs and the loop is not stopping. The loop's turn in between would have
+        done nothing but poll I/O (the caller must let it turn now and then).
+
+        Example:
+            >>> async def main() -> tuple[bool, float, bool]:
+            ...     loop = asyncio.get_running_loop()
+            ...     skipped = loop.skip_ahead(1.0)  # nothing else to do before t = 1
+            ...     now = loop.time()
+            ...     loop.call_later(0.5, lambda: None)
+            ...     return skipped, now, loop.skip_ahead(2.0)  # a timer falls due first
+            >>> run(main)
+            (True, 1.0, False)
+        """
+        if self._ready or self._thread_jobs or self._stopping:  # type: ignore[attr-defined]
+            return False
+        scheduled: list[asyncio.TimerHandle] = self._scheduled  # type: ignore[attr-defined]
+        if scheduled and scheduled[0].when() <= when:
+            return False
+        self._now = max(self._now, when)
+        return True
+
     def _thread_job_done(self, _future: asyncio.Future[Any]) -> None:
         self._thread_jobs -= 1
 

@@ -7,15 +7,20 @@ steps MuJoCo, writes every sensor to ``robot.state`` in one batch (monitors
 see each tick's values), then runs the controllers the motion actions
 registered. In lockstep the loop's virtual clock jumps from tick to tick; in
 real time the same code runs against the wall clock.
+
+In lockstep, when nothing else would run before the next tick (no callback
+ready, no earlier timer), the next tick runs at once in the same callback: the
+loop's turn in between would only have polled I/O. The ticks, and everything
+they compute, are the same; the loop still turns every `TICKS_PER_TURN` ticks.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
-from .._core._clock import is_virtual
+from .._core._clock import VirtualTimeLoop, is_virtual
 from .._core._numbers import finite
 from .._exceptions import LockstepError
 from ..motion import Controllers
@@ -27,6 +32,9 @@ if TYPE_CHECKING:
     from ._world import SimWorld
 
 _log = logging.getLogger("pyrobots_aio.sim")
+
+TICKS_PER_TURN = 10
+"""Lockstep ticks run back to back at most (when nothing else is due between them)."""
 
 
 class SimBackend:
@@ -60,6 +68,7 @@ class SimBackend:
         self.ticks = 0
         self._robot: Robot | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._virtual: VirtualTimeLoop | None = None  # the loop, in lockstep
         self._timer: asyncio.TimerHandle | None = None
         self._controllers = Controllers()
 
@@ -74,6 +83,7 @@ class SimBackend:
             )
             raise LockstepError(msg)
         self._robot, self._loop = robot, loop
+        self._virtual = None if self.realtime else cast("VirtualTimeLoop", loop)
         # The world's clock reads the loop's (the physics pauses between runs).
         self.world.set_time(loop.time())
         robot.state.write_owned(self.world.read_sensors())
@@ -92,7 +102,7 @@ class SimBackend:
             self._timer = None
         self.world.stop()
         self._controllers.cancel()
-        self._robot = self._loop = None
+        self._robot = self._loop = self._virtual = None
 
     async def control(self, controller: Callable[[], bool]) -> None:
         """Call ``controller()`` after every tick until it returns True.
@@ -109,12 +119,23 @@ class SimBackend:
         robot, loop = self._robot, self._loop
         if robot is None or loop is None:
             return
-        self.ticks += 1
-        self.world.step(self.steps_per_tick)
-        self._schedule(loop)
-        robot.state.write_owned(self.world.read_sensors())
-        if self._controllers:
-            self._run_controllers()
+        # In lockstep, the next tick runs at once, in this callback, while nothing else would
+        # run before it (the loop's turn in between would only cost time); the loop turns
+        # (polls I/O) at least every TICKS_PER_TURN ticks.
+        virtual = self._virtual
+        left = TICKS_PER_TURN
+        while True:
+            self.ticks += 1
+            world = self.world
+            world.step(self.steps_per_tick)
+            when = world.time_after(self.steps_per_tick)
+            robot.state.write_owned(world.read_sensors())
+            if self._controllers:
+                self._run_controllers()
+            left -= 1
+            if not left or virtual is None or not virtual.skip_ahead(when):
+                break
+        self._timer = loop.call_at(when, self._tick)
 
     def _schedule(self, loop: asyncio.AbstractEventLoop) -> None:
         self._timer = loop.call_at(self.world.time_after(self.steps_per_tick), self._tick)
