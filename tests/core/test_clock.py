@@ -247,6 +247,10 @@ def test_skip_ahead_moves_time_on_only_when_nothing_would_run_before() -> None:
         seen.append((loop.skip_ahead(4.0), loop.time()))
         release.set()
         await job
+        for bad in (float("inf"), float("nan"), "soon"):
+            with pytest.raises(ValueError, match="when must be a finite number"):
+                loop.skip_ahead(bad)  # type: ignore[arg-type]
+        assert loop.time() == 2.5  # a refused time leaves the clock alone
         loop.stop()  # a stopping loop must turn (stop() takes effect after this iteration)
         seen.append((loop.skip_ahead(5.0), loop.time()))
         return seen

@@ -332,6 +332,10 @@ def test_write_owned_is_a_batch_update_of_the_dict_given_up() -> None:
         store.write_owned({1: "one"})  # type: ignore[dict-item]
     assert 1 not in dict(store)  # nothing of a refused write is kept
     assert store.version() == version + 1
+    for bad in (None, [("a", 5)], {"a": 5}.items()):
+        with pytest.raises(TypeError, match=r"write_owned takes a dict .* use store\.update"):
+            store.write_owned(bad)  # type: ignore[arg-type]
+    assert (store.a, store.version()) == (1, version + 1)
 
 
 def test_per_key_subscription_sees_only_its_keys() -> None:

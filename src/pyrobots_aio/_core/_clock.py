@@ -45,6 +45,7 @@ import warnings
 from typing import TYPE_CHECKING, Any, TypeVar, TypeVarTuple
 
 from .._exceptions import EventLoopError
+from ._numbers import finite
 
 if TYPE_CHECKING:
     from collections import deque
@@ -214,7 +215,12 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
             ...     return skipped, now, loop.skip_ahead(2.0)  # a timer falls due first
             >>> run(main)
             (True, 1.0, False)
+
+        Raises:
+            ValueError: ``when`` is not a finite number (the clock is left as it was).
         """
+        if type(when) is not float or when - when != 0.0:  # (floats pass at once: every tick)
+            when = finite("when", when, fix="pass the loop time of the next tick")
         if self._ready or self._thread_jobs or self._stopping:  # type: ignore[attr-defined]
             return False
         scheduled: list[asyncio.TimerHandle] = self._scheduled  # type: ignore[attr-defined]

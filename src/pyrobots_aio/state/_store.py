@@ -294,7 +294,17 @@ class StateStore(Mapping[str, Any]):
             >>> store.write_owned({"v": 0.25, "w": 0.0})
             >>> store.v, store.version()
             (0.25, 1)
+
+        Raises:
+            TypeError: ``changes`` is not a dict (use `update` for other mappings), or a
+                key is not a string; nothing is written then.
         """
+        if type(changes) is not dict:
+            msg = (
+                f"write_owned takes a dict of state keys to values, got {changes!r} "
+                f"({type(changes).__name__}); use store.update(...) for other mappings"
+            )
+            raise TypeError(msg)
         if not changes:
             return
         if not changes.keys() <= self._values.keys():  # known keys are strings already
