@@ -65,7 +65,16 @@ class Action(Generic[R, P, T]):
         executive: Executive | None = getattr(robot, "_executive", None)
         if executive is None:
             executive = executive_of(robot, self.name)  # raises, naming what was passed
-        return executive.spawn(self.name, self.fn, self.fn(robot, *args, **kwargs), self.hooks)
+        fn: Callable[..., Coroutine[Any, Any, T]] = self.fn
+        # A call through ``*``/``**`` costs about 100 ns more than a plain one (a bare
+        # task starts in 6 us): only a call that passes arguments pays for it.
+        if kwargs:
+            coro = fn(robot, *args, **kwargs)
+        elif args:
+            coro = fn(robot, *args)
+        else:
+            coro = fn(robot)
+        return executive.spawn(self.name, fn, coro, self.hooks)
 
     @overload
     def __get__(self, instance: None, owner: type[Any]) -> Action[R, P, T]: ...

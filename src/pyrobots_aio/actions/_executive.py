@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import asyncio
 import threading
+import time
 from collections import deque
+from threading import get_ident
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._core._logging import LogScope
-from .._core._loops import current_loop, wrong_loop
+from .._core._loops import clock_of, running_here, wrong_loop
 from .._core._numbers import finite
 from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
@@ -67,6 +69,10 @@ class Executive:
         self.log = self.log_scope.logger("pyrobots_aio.actions")
         self._loop: asyncio.AbstractEventLoop | None = None
         self.thread = ""
+        self.thread_ident = 0
+        """The ident of the thread the robot's loop runs in (`running_here`)."""
+        self.clock: Callable[[], float] = time.monotonic
+        """The loop's clock (`clock_of`): the actions' timestamps."""
         self._running: dict[int, ActionHandle[Any]] = {}
         self._roots: dict[ActionHandle[Any], None] = {}
         self._next_id = 1
@@ -95,11 +101,13 @@ class Executive:
         """Start accepting actions on ``loop`` (the running loop, in this thread)."""
         self._loop = loop
         self.thread = threading.current_thread().name
+        self.thread_ident = get_ident()
+        self.clock = clock_of(loop)
 
     def check_loop(self, what: str) -> asyncio.AbstractEventLoop:
         """The robot's loop; `EventLoopError` if the caller is on another thread or loop."""
         loop = self.loop
-        if current_loop() is not loop:
+        if not running_here(loop, self.thread_ident):
             raise wrong_loop(what, loop, self.thread)
         return loop
 
@@ -155,7 +163,8 @@ class Executive:
             parent = None
         if (
             loop is None
-            or current_loop() is not loop
+            or get_ident() != self.thread_ident  # running_here(loop, ...), inlined
+            or not loop.is_running()
             or (parent is None and self._closing)
             or (
                 self.max_actions is not None
@@ -167,7 +176,9 @@ class Executive:
             raise self._refusal(name, loop, uncapped=uncapped)
         ident = self._next_id
         self._next_id = ident + 1
-        handle: ActionHandle[T] = ActionHandle(self, loop, ident, name, parent)
+        handle: ActionHandle[T] = ActionHandle(
+            self, loop, ident, name, parent, spawned_at=self.clock()
+        )
         handle._fn = fn
         handle._hooks = hooks
         if self.paused and parent is not None and frozen(parent):
@@ -192,7 +203,7 @@ class Executive:
                 "start it inside 'async with robot:'"
             )
             return RobotNotRunningError(msg)
-        if current_loop() is not loop:
+        if not running_here(loop, self.thread_ident):
             return wrong_loop(f"start action {name!r}", loop, self.thread)
         if self.max_actions is not None and len(self._running) >= self.max_actions and not uncapped:
             return TooManyActions(name, self.max_actions, list(self._running.values()))

@@ -16,9 +16,10 @@ import asyncio
 import enum
 import traceback
 import weakref
+from threading import get_ident
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
-from .._core._loops import current_loop, wrong_loop
+from .._core._loops import running_here, wrong_loop
 from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
 from ._context import current_action
 from ._pause import frozen, frozen_time, stepped
@@ -137,13 +138,15 @@ class ActionHandle(Generic[T]):
         ident: int,
         name: str,
         parent: ActionHandle[Any] | None,
+        *,
+        spawned_at: float,
     ) -> None:
         self._executive = executive
         self._loop = loop
         self.id = ident
         self.name = name
         self.parent = parent
-        self.spawned_at = loop.time()
+        self.spawned_at = spawned_at
         self.started_at: float | None = None
         self.finished_at: float | None = None
         self.held: tuple[str, ...] = ()
@@ -180,8 +183,8 @@ class ActionHandle(Generic[T]):
         # A generator, with its helpers inlined: every awaited action pays for this.
         if self._phase != DONE:
             loop = self._loop
-            if current_loop() is not loop:
-                what = f"await action {self.name}#{self.id}"
+            if get_ident() != self._executive.thread_ident or not loop.is_running():
+                what = f"await action {self.name}#{self.id}"  # running_here(), inlined
                 raise wrong_loop(what, loop, self._executive.thread)
             fut: asyncio.Future[None] = asyncio.Future(loop=loop)
             if self._waiters is None:
@@ -234,7 +237,7 @@ class ActionHandle(Generic[T]):
     def _waiter(self, verb: str) -> asyncio.Future[None]:
         """A future the action's end completes; the caller must be on the robot's loop."""
         loop = self._loop
-        if current_loop() is not loop:
+        if not running_here(loop, self._executive.thread_ident):
             raise wrong_loop(f"{verb} action {self.name}#{self.id}", loop, self._executive.thread)
         fut = loop.create_future()
         if self._waiters is None:
@@ -536,11 +539,12 @@ class ActionHandle(Generic[T]):
             return
         if release and self._finalizers is not None:
             self._run_finalizers()
-        if self._paused or self._suspended is not None:
-            self._executive.unpause(self)
+        executive = self._executive
+        if executive.paused and (self._paused or self._suspended is not None):
+            executive.unpause(self)
         self._phase = DONE
         self._coro = None
-        self.finished_at = self._loop.time()
+        self.finished_at = executive.clock()
         if self._callbacks is not None:  # scheduled first: they run before awaiters resume
             callbacks, self._callbacks = self._callbacks, None
             for callback in callbacks:
@@ -555,7 +559,7 @@ class ActionHandle(Generic[T]):
         self._task = None  # the task's context refers back to this handle
         if self._outcome is Outcome.FAILED and not waiting:
             self._report_unless_retrieved()
-        self._executive.finished(self)
+        executive.finished(self)
         if self._internal is not None:
             internal, self._internal = self._internal, None
             for callback in internal:
@@ -616,8 +620,8 @@ async def drive(  # noqa: PLR0912 (one flat coroutine: every action pays for eac
         else:
             handle._coro = coro
             handle._phase = RUNNING
-            handle.started_at = handle._loop.time()
             executive = handle._executive
+            handle.started_at = executive.clock()
             if executive.instruments.items:
                 executive.started(handle)
             try:

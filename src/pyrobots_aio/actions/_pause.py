@@ -73,7 +73,7 @@ def subtree(handle: ActionHandle[Any]) -> Iterator[ActionHandle[Any]]:
 def stepped(handle: ActionHandle[Any], coro: Coroutine[Any, Any, T]) -> Generator[Any, Any, T]:
     """Run ``coro`` (the body), holding each resumption while ``handle`` is frozen."""
     executive = handle._executive
-    send, throw = coro.send, coro.throw
+    send = coro.send
     message: Any = None
     error: BaseException | None = None
     while True:
@@ -86,7 +86,7 @@ def stepped(handle: ActionHandle[Any], coro: Coroutine[Any, Any, T]) -> Generato
             except BaseException as exc:  # cancellation reaches a frozen body at once
                 error = _passed_on(exc)
         try:
-            yielded = send(message) if error is None else throw(error)
+            yielded = send(message) if error is None else coro.throw(error)
         except StopIteration as stop:
             return stop.value  # type: ignore[no-any-return]
         message = error = None

@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from pyrobots_aio._core._loops import current_loop, wrong_loop
+from pyrobots_aio._core._loops import clock_of, running_here, wrong_loop
 from pyrobots_aio._exceptions import UnknownStateKeyError
 
 from ._filter import MovingAverage
@@ -97,6 +97,8 @@ class StateStore(Mapping[str, Any]):
 
     __slots__ = (
         "_clock",
+        "_given_clock",
+        "_ident",
         "_ledger",
         "_loop",
         "_subscribers",
@@ -119,6 +121,7 @@ class StateStore(Mapping[str, Any]):
             clock: Where timestamps come from; default: the running loop's
                 ``time()``, or ``time.monotonic()`` while no loop runs.
         """
+        self._given_clock = clock
         self._clock = clock or _loop_time
         self._values: dict[str, Any] = {}
         self._ledger = WriteLedger()
@@ -127,6 +130,7 @@ class StateStore(Mapping[str, Any]):
         self._windows: dict[str, MovingAverage] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread = ""
+        self._ident = 0
         if initial:
             self.update(initial)
 
@@ -139,6 +143,9 @@ class StateStore(Mapping[str, Any]):
         """
         self._loop = loop
         self._thread = threading.current_thread().name if loop is not None else ""
+        self._ident = threading.get_ident()
+        if self._given_clock is None:  # a bound store reads its loop's clock directly
+            self._clock = _loop_time if loop is None else clock_of(loop)
 
     # -- reading --------------------------------------------------------------
 
@@ -232,7 +239,7 @@ class StateStore(Mapping[str, Any]):
     def set(self, key: str, value: Any) -> None:
         """Write ``value`` under ``key`` and notify its subscribers."""
         check_key(key)
-        if self._loop is not None and current_loop() is not self._loop:
+        if self._loop is not None and not running_here(self._loop, self._ident):
             raise wrong_loop(f"write state key {key!r}", self._loop, self._thread)
         now = self._clock()
         self._values[key] = value
@@ -310,7 +317,7 @@ class StateStore(Mapping[str, Any]):
         if not changes.keys() <= self._values.keys():  # known keys are strings already
             for key in changes:
                 check_key(key)
-        if self._loop is not None and current_loop() is not self._loop:
+        if self._loop is not None and not running_here(self._loop, self._ident):
             raise wrong_loop(f"write state keys {sorted(changes)}", self._loop, self._thread)
         now = self._clock()
         keys = tuple(changes)
