@@ -128,7 +128,16 @@ def _many_monitors(robot: Robot, keys: list[str]) -> None:
         elif kind == 3:
             robot.whenever(key, above=1e9, held_for=1.0)
         else:
-            robot.whenever(lambda r, k=key: r.state[k] < -1.0)
+            robot.whenever(_below(key, -1.0))
+
+
+def _below(key: str, limit: float) -> Callable[[Robot], bool]:
+    """A condition as a plain predicate: ``robot.state[key] < limit``."""
+
+    def below(robot: Robot) -> bool:
+        return bool(robot.state[key] < limit)
+
+    return below
 
 
 async def _idle(robot: Robot) -> dict[str, float]:
@@ -218,7 +227,7 @@ async def _py_trees(mode: str, period: float, samples: int) -> dict[str, float]:
     writer.lever = False
     reaction: list[asyncio.Future[None]] = []
 
-    class React(py_trees.behaviour.Behaviour):  # type: ignore[misc]
+    class React(py_trees.behaviour.Behaviour):
         def update(self) -> Any:
             if reaction and not reaction[0].done():
                 reaction[0].set_result(None)

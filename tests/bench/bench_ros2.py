@@ -8,7 +8,7 @@ in an ``std_msgs/Int64`` and the receiver subtracts it from its own clock.
 - ``topic_to_callback_*``: a message from another process, until a monitor
   callback runs on ``robot.state`` (the bridge), beside a plain rclpy
   subscription callback in the same process, on the same messages;
-- ``publish_to_wire_*``: ``robot.ros2.publisher(...).publish`` (what
+- ``publish_to_wire_*``: ``node.publisher(...).publish`` (what
   ``drive()`` will use) until the message reaches another process, beside a
   plain rclpy publisher in the same process, alternately;
 - ``drive_to_wire_*``: `Ros2Robot.drive` (checks, the e-stop latch, a
@@ -34,8 +34,12 @@ import subprocess
 import sys
 import threading
 import time
+from typing import TYPE_CHECKING, Any
 
 from .bench_events import _p99, _stats
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 LATENCY_N = 1_500
 PERIOD = 0.004  # seconds between two latency messages: 250 Hz, a fast sensor
@@ -79,13 +83,15 @@ def _helper(mode: str) -> None:
 
         # The first arrival of each command (the bridge re-sends one with each odometry).
         first: dict[str, dict[float, int]] = {"bridge": {}, "plain": {}}
+
+        def arrived(kind: str) -> Callable[[Any], None]:
+            def on_twist(message: Any) -> None:
+                first[kind].setdefault(message.linear.x, time.perf_counter_ns())
+
+            return on_twist
+
         for kind in first:
-            node.create_subscription(
-                Twist,
-                f"/bench/{kind}/cmd_vel",
-                lambda m, k=kind: first[k].setdefault(m.linear.x, time.perf_counter_ns()),
-                1000,
-            )
+            node.create_subscription(Twist, f"/bench/{kind}/cmd_vel", arrived(kind), 1000)
         _feed_odometry(node)
         print("ready", flush=True)
         sys.stdin.readline()
@@ -181,10 +187,10 @@ async def _topic_to_callback() -> dict[str, float]:
     )
     sender = _start("send")
     robot = Robot()
-    attach_ros2(robot, "bench_bridge")
+    node = attach_ros2(robot, "bench_bridge")
     try:
         async with robot:
-            sub = robot.ros2.subscribe("/bench/latency", Int64, {"stamp": "data"}, qos=100)
+            sub = node.subscribe("/bench/latency", Int64, {"stamp": "data"}, qos=100)
             robot.state.stamp = 0
 
             def on_stamp() -> None:
@@ -221,11 +227,11 @@ async def _publish_to_wire() -> dict[str, float]:
     plain = _Plain("bench_plain_pub")
     plain_pub = plain.node.create_publisher(Int64, "/bench/wire_plain", 1000)
     robot = Robot()
-    attach_ros2(robot, "bench_bridge")
+    node = attach_ros2(robot, "bench_bridge")
     calls: dict[str, list[float]] = {"bridge": [], "plain": []}
     try:
         async with robot:
-            bridge_pub = robot.ros2.publisher("/bench/wire_bridge", Int64, qos=1000)
+            bridge_pub = node.publisher("/bench/wire_bridge", Int64, qos=1000)
             await bridge_pub.wait_for_subscribers()
             while plain_pub.get_subscription_count() < 1:  # noqa: ASYNC110 - a graph fact
                 await asyncio.sleep(0.01)
@@ -276,7 +282,11 @@ async def _drive_to_wire() -> dict[str, float]:
             while plain_pub.get_subscription_count() < 1:  # noqa: ASYNC110 - a graph fact
                 await asyncio.sleep(0.01)
             await asyncio.sleep(0.5)  # matched from the receiver's side too
-            drives = [("bridge", lambda v: robot.drive(v, 0.0)), ("plain", plain_drive)]
+
+            def bridge_drive(v: float) -> None:
+                robot.drive(v, 0.0)
+
+            drives = [("bridge", bridge_drive), ("plain", plain_drive)]
             for n in range(1, LATENCY_N + 1):  # each command's speed, n, tells it apart
                 for kind, drive in drives if n % 2 else drives[::-1]:
                     sent[kind][n] = time.perf_counter_ns()
@@ -317,14 +327,16 @@ async def _flood() -> dict[str, float]:
     lag: list[int] = []
     flooder = _start("flood")
     robot = Robot()
-    attach_ros2(robot, "bench_bridge")
+    node = attach_ros2(robot, "bench_bridge")
     try:
         async with robot:
-            sub = robot.ros2.subscribe("/bench/flood", Int64, lambda m: {"flood": m.data}, qos=1000)
-            robot.state.subscribe(
-                lambda _c: (bridge_times.append(time.perf_counter_ns()), lag.append(sub.queued)),
-                keys="flood",
-            )
+            sub = node.subscribe("/bench/flood", Int64, lambda m: {"flood": m.data}, qos=1000)
+
+            def on_flood(_changes: object) -> None:
+                bridge_times.append(time.perf_counter_ns())
+                lag.append(sub.queued)
+
+            robot.state.subscribe(on_flood, keys="flood")
             assert (await asyncio.to_thread(_tell, flooder, "2")).strip() == "done"
             for _ in range(200):  # what is still on its way
                 count = sub.received
