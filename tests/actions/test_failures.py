@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import asyncio
 import gc
+import traceback
 
 import pytest
 
-from pyrobots_aio import ActionCancelled, ActionInterrupted, Outcome, Robot, action
+from pyrobots_aio import Action, ActionCancelled, ActionInterrupted, Outcome, Robot, action
 from pyrobots_aio.actions import current_action
 
 pytestmark = [pytest.mark.asyncio, pytest.mark.virtual_time]
@@ -188,3 +189,35 @@ async def test_cancel_while_the_children_wind_up_never_masks_a_failure() -> None
         with pytest.raises(RuntimeError, match="arm jammed"):
             await parent
         assert parent.outcome is Outcome.FAILED
+
+
+@action
+async def fails_at_once(robot: Robot) -> None:
+    raise ValueError("bad gain")
+
+
+@action
+async def fails_after_a_raw_await(robot: Robot) -> None:
+    await asyncio.sleep(1)
+    raise ValueError("bad gain")
+
+
+@pytest.mark.parametrize("pause", [False, True], ids=["running", "paused-then-resumed"])
+@pytest.mark.parametrize("body", [fails_at_once, fails_after_a_raw_await], ids=lambda a: a.name)
+async def test_a_failure_traceback_starts_in_the_body(
+    body: Action[Robot, [], None], pause: bool
+) -> None:
+    # The executive's frames (the task's coroutine and the pause trampoline) hold the
+    # handle: they are cut off, whether the body failed on its first step or later.
+    async with Robot() as robot:
+        handle = body(robot)
+        if pause:
+            handle.pause()
+            await robot.sleep(2)
+            handle.resume()
+        await handle.wait_done()
+    error = handle.exception()
+    assert isinstance(error, ValueError)
+    frames = traceback.extract_tb(error.__traceback__)
+    assert frames[0].name == body.name
+    assert not [f for f in frames if "pyrobots_aio" in f.filename]

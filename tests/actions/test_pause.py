@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import types
+from collections.abc import Generator
 
 import pytest
 
@@ -18,6 +20,7 @@ from pyrobots_aio import (
     lock,
 )
 from pyrobots_aio.actions import current_action
+from pyrobots_aio.actions._pause import Stepped
 from pyrobots_aio.testing import EventLog
 
 pytestmark = pytest.mark.virtual_time
@@ -236,3 +239,63 @@ async def test_pauses_are_recorded_and_shown() -> None:
     resumed = events.first(EventKind.ACTION_RESUMED)
     assert (paused.name, paused.data["reason"], paused.data["paused"]) == ("ticker", "operator", 1)
     assert resumed.time == paused.time == 0.5
+
+
+@types.coroutine
+def exchange(log: list[str]) -> Generator[str, str, None]:
+    log.append((yield "hello"))  # a raw yield, and the value sent back
+
+
+@pytest.mark.asyncio
+async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws() -> None:
+    log: list[str] = []
+
+    async def body() -> None:
+        await exchange(log)
+
+    async with Robot() as robot:
+        handle = ticker(robot, [])  # a running action: the trampoline's handle
+        await robot.sleep(0)
+        stepped = Stepped(handle, body())
+        assert next(stepped) == "hello"
+        handle.pause()
+        thaw = stepped.send("world")  # frozen: kept, and the task gets the thaw future
+        assert isinstance(thaw, asyncio.Future)
+        assert thaw._asyncio_future_blocking
+        assert stepped.send(None) is thaw  # the thaw future is done only when it thaws
+        assert log == []
+        handle.resume()
+        with pytest.raises(StopIteration):
+            stepped.send(None)  # what the task sends once the thaw future is done
+        handle.cancel()
+    assert log == ["world"]
+
+
+@pytest.mark.asyncio
+async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body() -> None:
+    log: list[str] = []
+
+    async def body() -> None:
+        try:
+            await asyncio.sleep(3600)
+        except KeyError as exc:
+            log.append(f"caught {exc!r}")
+            await asyncio.sleep(3600)
+        finally:
+            log.append("cleaned up")
+
+    async with Robot() as robot:
+        handle = ticker(robot, [])  # a running action: the trampoline's handle
+        await robot.sleep(0)
+        # What a task does and what `yield from` delegation does: an instance, a type, or
+        # a type with its value and traceback.
+        for throw_args in [(KeyError("a"),), (KeyError,), (KeyError, KeyError("c"), None)]:
+            stepped = Stepped(handle, body())
+            assert isinstance(next(stepped), asyncio.Future)
+            assert isinstance(stepped.throw(*throw_args), asyncio.Future)  # caught, awaits again
+            stepped.close()
+        handle.cancel()
+    assert log == [
+        "caught KeyError('a')", "cleaned up", "caught KeyError()", "cleaned up",
+        "caught KeyError('c')", "cleaned up",
+    ]  # fmt: skip

@@ -398,22 +398,23 @@ class Executive:
     # -- the watchdog -----------------------------------------------------
 
     def _watch_later(self, handle: ActionHandle[Any], stage: int) -> None:
-        loop = self.loop
-        self._watch.append((loop.time() + self.cancel_grace, stage, handle))
-        if self._watch_timer is None:  # due at the earliest deadline, not at this one
-            self._watch_timer = loop.call_at(self._watch[0][0], self._watchdog)
+        self._watch.append((self.loop.time() + self.cancel_grace, stage, handle))
+        self._arm_watchdog()
+
+    def _arm_watchdog(self) -> None:
+        """Arm the watchdog's timer at the earliest deadline, unless it is armed already."""
+        if self._watch and self._watch_timer is None:
+            self._watch_timer = self.loop.call_at(self._watch[0][0], self._watchdog)
 
     def _watchdog(self) -> None:
         self._watch_timer = None
-        loop = self.loop
-        now = loop.time()
+        now = self.loop.time()
         watch = self._watch
         while watch and watch[0][0] <= now:
             _, stage, handle = watch.popleft()
             if not handle.done():
                 self._overdue(handle, stage)
-        if watch and self._watch_timer is None:  # `_overdue` may have armed it already
-            self._watch_timer = loop.call_at(watch[0][0], self._watchdog)
+        self._arm_watchdog()  # unless `_overdue` armed it already
 
     def _overdue(self, handle: ActionHandle[Any], stage: int) -> None:
         finishing = handle.state is ActionState.FINISHING

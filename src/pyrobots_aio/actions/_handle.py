@@ -17,17 +17,17 @@ import enum
 import traceback
 import weakref
 from threading import get_ident
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 from .._core._loops import running_here, wrong_loop
 from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
 from ._context import current_action
-from ._pause import frozen, frozen_time, stepped
+from ._pause import Stepped, frozen, frozen_time
 from ._phases import DONE, FINISHING, PENDING, RUNNING
 from ._where import definition, location
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Coroutine, Generator
+    from collections.abc import Awaitable, Callable, Coroutine, Generator
     from types import TracebackType
 
     from .._core._logging import ScopedLogger
@@ -625,7 +625,7 @@ async def drive(  # noqa: PLR0912 (one flat coroutine: every action pays for eac
             if executive.instruments.items:
                 executive.started(handle)
             try:
-                value = await stepped(handle, coro)
+                value = await cast("Awaitable[T]", Stepped(handle, coro))
             except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
                 handle._settle(Outcome.FAILED, error=exc)
                 handle._complete()
@@ -693,12 +693,12 @@ def _from_the_body(error: BaseException) -> TracebackType | None:
     forgotten failure from being reported when its handle goes.
     """
     tb = error.__traceback__
-    while tb is not None and tb.tb_frame.f_code in _OWN_CODE:
+    while tb is not None and tb.tb_frame.f_globals.get("__name__") in _OWN_MODULES:
         tb = tb.tb_next
     return tb
 
 
-_OWN_CODE = frozenset({drive.__code__, stepped.__code__})
+_OWN_MODULES = frozenset({__name__, frozen.__module__})  # the task's and the trampoline's
 
 
 def _report_failure(log: ScopedLogger, name: str, ident: int, report: str) -> None:

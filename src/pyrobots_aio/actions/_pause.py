@@ -19,13 +19,12 @@ from __future__ import annotations
 
 import asyncio
 import inspect
-import types
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from ._phases import DONE
 
 if TYPE_CHECKING:
-    from collections.abc import Coroutine, Generator, Iterator
+    from collections.abc import Coroutine, Iterator
 
     from ._handle import ActionHandle
 
@@ -69,58 +68,74 @@ def subtree(handle: ActionHandle[Any]) -> Iterator[ActionHandle[Any]]:
         stack.extend(reversed(node._children))
 
 
-@types.coroutine
-def stepped(handle: ActionHandle[Any], coro: Coroutine[Any, Any, T]) -> Generator[Any, Any, T]:
-    """Run ``coro`` (the body), holding each resumption while ``handle`` is frozen."""
-    executive = handle._executive
-    send = coro.send
-    message: Any = None
-    error: BaseException | None = None
-    while True:
-        if executive.paused and error is None and frozen(handle):
-            try:
-                yield from _thawed(handle)
-            except GeneratorExit:
-                coro.close()
-                raise
-            except BaseException as exc:  # cancellation reaches a frozen body at once
-                error = _passed_on(exc)
-        try:
-            yielded = send(message) if error is None else coro.throw(error)
-        except StopIteration as stop:
-            return stop.value  # type: ignore[no-any-return]
-        message = error = None
-        try:
-            message = yield yielded
-        except GeneratorExit:
-            coro.close()
-            raise
-        except BaseException as exc:  # handed on to the body, as an await would
-            error = _passed_on(exc)
+class Stepped(Generic[T]):
+    """The body ``coro``, awaited through this: each resumption held while ``handle`` is frozen.
 
-
-def _passed_on(error: BaseException) -> BaseException:
-    """``error``, thrown in here by the task, without this frame in its traceback.
-
-    The task throws a failed future's exception in (rather than sending); it
-    goes on into the body as if the body had received it itself: this frame,
-    which holds the handle, must not stay in its traceback.
+    An iterator that the action's task awaits in the body's place: it forwards
+    each ``send``/``throw`` to the body, unless the action is frozen. Then it
+    keeps the value meant for the body and hands the task the action's thaw
+    future; when that completes, the kept value goes on to the body. An
+    exception thrown in (cancellation) goes on to the body at once, frozen or
+    not. A class, not a generator: no frame of its own in the body's
+    tracebacks, and it compiles to a native iterator.
     """
-    tb = error.__traceback__
-    if tb is not None and tb.tb_frame.f_code is _STEPPED:
-        error.__traceback__ = tb.tb_next
-    return error
 
+    __slots__ = ("_coro", "_executive", "_handle", "_held", "_thawing")
 
-def _thawed(handle: ActionHandle[Any]) -> Generator[Any, Any, None]:
-    """Wait (inside `stepped`) until ``handle`` thaws."""
-    while frozen(handle):
-        if handle._thaw is None or handle._thaw.done():
-            handle._thaw = handle._loop.create_future()
-        yield from handle._thaw
+    def __init__(self, handle: ActionHandle[Any], coro: Coroutine[Any, Any, T]) -> None:
+        self._handle = handle
+        self._executive = handle._executive
+        self._coro = coro
+        self._held: Any = None  # the value the body gets when it thaws
+        self._thawing = False  # the task waits for the thaw future
 
+    def __await__(self) -> Stepped[T]:
+        return self
 
-_STEPPED = stepped.__code__
+    def __iter__(self) -> Stepped[T]:
+        return self
+
+    def __next__(self) -> Any:
+        if self._thawing or (self._executive.paused and frozen(self._handle)):
+            return self.send(None)
+        return self._coro.send(None)
+
+    def send(self, value: Any) -> Any:
+        """Resume the body with ``value``, or hand the task the thaw future while it is frozen."""
+        if self._thawing:  # the thaw future is done: the kept value, once the action thaws
+            value = self._held
+        handle = self._handle
+        if self._executive.paused and frozen(handle):
+            self._held = value
+            self._thawing = True
+            thaw = handle._thaw
+            if thaw is None or thaw.done():
+                thaw = handle._thaw = handle._loop.create_future()
+            thaw._asyncio_future_blocking = True  # what ``yield from thaw`` would set
+            return thaw
+        self._thawing = False
+        self._held = None
+        return self._coro.send(value)
+
+    def throw(self, kind: Any, value: Any = None, traceback: Any = None) -> Any:
+        """Throw an exception into the body at once, frozen or not (cancellation must arrive)."""
+        if isinstance(kind, BaseException):
+            error = kind
+        elif isinstance(value, BaseException):
+            error = value
+        else:
+            error = kind() if value is None else kind(value)
+        if traceback is not None:
+            error = error.with_traceback(traceback)
+        self._thawing = False
+        self._held = None
+        return self._coro.throw(error)
+
+    def close(self) -> None:
+        """Close the body (the task's coroutine is closed while it waits here)."""
+        self._thawing = False
+        self._held = None
+        self._coro.close()
 
 
 def freeze(
