@@ -2,7 +2,7 @@
 
 An action is *frozen* while it or one of its ancestors is paused and no
 cancellation was requested for it (cancellation reaches a paused action at
-once, and its cleanup must run). Its body runs through `stepped`, which
+once, and its cleanup must run). Its body runs through `Stepped`, which
 forwards each ``send``/``throw`` of the task to the body: whatever the body
 awaits (``robot.sleep``, a raw ``asyncio.sleep``, a socket) may complete
 meanwhile, but the body is not resumed until the action thaws. So a body
