@@ -8,6 +8,7 @@ import types
 from collections.abc import Generator
 
 import pytest
+from build_support import trampolines
 
 from pyrobots_aio import (
     ActionCancelled,
@@ -20,10 +21,12 @@ from pyrobots_aio import (
     lock,
 )
 from pyrobots_aio.actions import current_action
-from pyrobots_aio.actions._pause import Stepped
+from pyrobots_aio.actions._pause import PyStepped, hold
 from pyrobots_aio.testing import EventLog
 
 pytestmark = pytest.mark.virtual_time
+
+TRAMPOLINES = pytest.mark.parametrize("trampoline", trampolines())
 
 ARM = Resource("arm")
 
@@ -247,7 +250,10 @@ def exchange(log: list[str]) -> Generator[str, str, None]:
 
 
 @pytest.mark.asyncio
-async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws() -> None:
+@TRAMPOLINES
+async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws(
+    trampoline: type[PyStepped[None]],
+) -> None:
     log: list[str] = []
 
     async def body() -> None:
@@ -256,7 +262,7 @@ async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws() -> Non
     async with Robot() as robot:
         handle = ticker(robot, [])  # a running action: the trampoline's handle
         await robot.sleep(0)
-        stepped = Stepped(handle, body())
+        stepped = trampoline(hold, handle._executive, handle, body())
         assert next(stepped) == "hello"
         handle.pause()
         thaw = stepped.send("world")  # frozen: kept, and the task gets the thaw future
@@ -272,7 +278,10 @@ async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws() -> Non
 
 
 @pytest.mark.asyncio
-async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body() -> None:
+@TRAMPOLINES
+async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body(
+    trampoline: type[PyStepped[None]],
+) -> None:
     log: list[str] = []
 
     async def body() -> None:
@@ -290,7 +299,7 @@ async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body()
         # What a task does and what `yield from` delegation does: an instance, a type, or
         # a type with its value and traceback.
         for throw_args in [(KeyError("a"),), (KeyError,), (KeyError, KeyError("c"), None)]:
-            stepped = Stepped(handle, body())
+            stepped = trampoline(hold, handle._executive, handle, body())
             assert isinstance(next(stepped), asyncio.Future)
             assert isinstance(stepped.throw(*throw_args), asyncio.Future)  # caught, awaits again
             stepped.close()

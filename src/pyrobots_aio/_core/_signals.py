@@ -39,10 +39,13 @@ import functools
 import inspect
 import logging
 import signal
-from typing import TYPE_CHECKING, Self
+from typing import TYPE_CHECKING, Any, Self
 
 if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
     from types import TracebackType
+
+    UnstartedFinder = Callable[[asyncio.AbstractEventLoop], Iterable[asyncio.Task[Any]]]
 
 _log = logging.getLogger("pyrobots_aio.signals")
 
@@ -66,7 +69,20 @@ def _takes_over(signum: int, handler: object) -> bool:
     return handler is signal.SIG_DFL
 
 
-def _started(task: asyncio.Task[object]) -> bool:
+_finders: list[UnstartedFinder] = []
+
+
+def track_unstarted(finder: UnstartedFinder) -> Callable[[], None]:
+    """Have ``finder(loop)`` name tasks on ``loop`` not started yet; return how to stop.
+
+    For tasks whose coroutine cannot tell (a compiled one has no
+    ``cr_frame``): the executive names its actions' tasks this way.
+    """
+    _finders.append(finder)
+    return functools.partial(_finders.remove, finder)
+
+
+def _started(task: asyncio.Task[object], unstarted: set[asyncio.Task[Any]]) -> bool:
     """Whether ``task`` has begun to run its coroutine.
 
     A task cancelled before its first step never runs a line of it: an action's
@@ -74,6 +90,8 @@ def _started(task: asyncio.Task[object]) -> bool:
     the action would wait forever. A task not yet started is left to start; an
     action of a cancelled parent sees the cancellation when it does.
     """
+    if task in unstarted:
+        return False
     coro = task.get_coro()
     return not inspect.iscoroutine(coro) or inspect.getcoroutinestate(coro) != "CORO_CREATED"
 
@@ -133,8 +151,9 @@ class SignalStop:
         that follow cut that cleanup short too.
         """
         assert self._loop is not None
+        unstarted = {task for finder in _finders for task in finder(self._loop)}
         for task in asyncio.all_tasks(self._loop):
-            if _started(task):
+            if _started(task, unstarted):
                 self._cancel(task, reason)
         if passes > 1:
             self._loop.call_soon(self._cut, reason, passes - 1)
