@@ -18,6 +18,7 @@ from pathlib import Path
 from pyrobots_aio import ActionCancelled, ActionHandle, Robot, action
 
 THROUGHPUT_N = 20_000
+ROUNDS = 7
 BATCH = 2_000
 LATENCY_N = 2_000
 SLEEPERS = 100_000
@@ -62,14 +63,25 @@ def _rss_bytes() -> int:
 
 
 async def _throughput(robot: Robot) -> dict[str, float]:
-    start = time.perf_counter()
-    for _ in range(THROUGHPUT_N):
-        await nop(robot)
-    action_s = time.perf_counter() - start
-    start = time.perf_counter()
-    for _ in range(THROUGHPUT_N):
-        await asyncio.create_task(bare_nop())
-    bare_s = time.perf_counter() - start
+    """One by one, actions and bare tasks in turn, ROUNDS times: the best of each is compared.
+
+    A single pass of each swings by 10 % on this shared machine; taking each
+    side's best of several interleaved passes (as ``timeit`` does) leaves the
+    noise out of the ratio, and the median of the per-round ratios is beside it.
+    """
+    action_best = bare_best = float("inf")
+    ratios = []
+    for _ in range(ROUNDS):
+        start = time.perf_counter()
+        for _ in range(THROUGHPUT_N):
+            await nop(robot)
+        action_s = time.perf_counter() - start
+        start = time.perf_counter()
+        for _ in range(THROUGHPUT_N):
+            await asyncio.create_task(bare_nop())
+        bare_s = time.perf_counter() - start
+        ratios.append(action_s / bare_s)
+        action_best, bare_best = min(action_best, action_s), min(bare_best, bare_s)
     start = time.perf_counter()
     for _ in range(THROUGHPUT_N // BATCH):  # batches short enough not to alarm the watchdog
         handles = [nop(robot) for _ in range(BATCH)]
@@ -77,9 +89,10 @@ async def _throughput(robot: Robot) -> dict[str, float]:
             await handle
     batch_s = time.perf_counter() - start
     return {
-        "throughput_actions_per_s": THROUGHPUT_N / action_s,
-        "throughput_bare_tasks_per_s": THROUGHPUT_N / bare_s,
-        "throughput_ratio_vs_bare": action_s / bare_s,
+        "throughput_actions_per_s": THROUGHPUT_N / action_best,
+        "throughput_bare_tasks_per_s": THROUGHPUT_N / bare_best,
+        "throughput_ratio_vs_bare": action_best / bare_best,
+        "throughput_ratio_vs_bare_median": statistics.median(ratios),
         "throughput_batch_actions_per_s": THROUGHPUT_N / batch_s,
     }
 
