@@ -149,27 +149,34 @@ failed:
     return PYGEN_ERROR;
 }
 
+/* Raise StopIteration(result), as a generator returning result does; steals result. */
+static PyObject *
+stepped_returned(PyObject *result)
+{
+    /* StopIteration(value): a tuple or an exception as the value must not be unpacked */
+    PyObject *stop = PyObject_CallOneArg(PyExc_StopIteration, result);
+    Py_DECREF(result);
+    if (stop != NULL) {
+        PyErr_SetObject(PyExc_StopIteration, stop);
+        Py_DECREF(stop);
+    }
+    return NULL;
+}
+
 static PyObject *
 stepped_iternext(Stepped *self)
 {
     PyObject *result;
     PySendResult status = stepped_am_send(self, Py_None, &result);
-    if (status == PYGEN_RETURN) {
-        if (result == Py_None) {
-            Py_DECREF(result);
-            PyErr_SetNone(PyExc_StopIteration);
-            return NULL;
-        }
-        /* StopIteration(value): a tuple or an exception as the value must not be unpacked */
-        PyObject *stop = PyObject_CallOneArg(PyExc_StopIteration, result);
+    if (status != PYGEN_RETURN) {
+        return result; /* the next value, or NULL with the body's error set */
+    }
+    if (result == Py_None) { /* the common ending: no StopIteration instance to make */
         Py_DECREF(result);
-        if (stop != NULL) {
-            PyErr_SetObject(PyExc_StopIteration, stop);
-            Py_DECREF(stop);
-        }
+        PyErr_SetNone(PyExc_StopIteration);
         return NULL;
     }
-    return result; /* the next value, or NULL with the body's error set */
+    return stepped_returned(result);
 }
 
 static PyObject *
@@ -177,16 +184,7 @@ stepped_send(Stepped *self, PyObject *value)
 {
     PyObject *result;
     PySendResult status = stepped_am_send(self, value, &result);
-    if (status == PYGEN_RETURN) {
-        PyObject *stop = PyObject_CallOneArg(PyExc_StopIteration, result);
-        Py_DECREF(result);
-        if (stop != NULL) {
-            PyErr_SetObject(PyExc_StopIteration, stop);
-            Py_DECREF(stop);
-        }
-        return NULL;
-    }
-    return result;
+    return status == PYGEN_RETURN ? stepped_returned(result) : result;
 }
 
 static void
