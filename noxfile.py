@@ -24,7 +24,9 @@ def install_compiled(session: nox.Session, extras: str, *more: str) -> None:
     Never editable: an editable install is pure Python. The wheel is built anew
     each time, so an edited source is what gets compiled and installed.
     """
-    wheels = Path(session.create_tmp()) / "wheels"
+    # Not session.create_tmp(): it points TMPDIR into the project, where the tests' own
+    # pytest runs (pytester) would find the project's configuration.
+    wheels = Path(session.virtualenv.location) / "wheels"
     shutil.rmtree(wheels, ignore_errors=True)
     session.run("uv", "build", "--wheel", "--out-dir", str(wheels), env=COMPILED, external=True)
     (wheel,) = wheels.glob("pyrobots_aio-*.whl")
