@@ -1,14 +1,8 @@
-"""The wheel ships the MJCF models, and a package installed from it finds its own copy.
-
-Its build hook (hatch_build.py) compiles the actions core where it can: how it
-chooses and falls back is checked here; the compiled build itself is tested by
-``nox -s compiled``, which runs the whole suite on it.
-"""
+"""The wheel is py3-none-any and ships the MJCF models; installed, it finds its own copy."""
 
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import zipfile
@@ -20,19 +14,12 @@ ROOT = Path(__file__).resolve().parent.parent
 MODELS = ("arena.xml", "robot.xml", "scene.xml")
 
 
-def _build(out: Path, **env: str) -> subprocess.CompletedProcess[str]:
-    """Build the project's wheel with hatchling (the build backend) into ``out``."""
-    build = [sys.executable, "-m", "hatchling", "build", "--target", "wheel", "--directory", out]
-    return subprocess.run(
-        build, cwd=ROOT, env={**os.environ, **env}, capture_output=True, text=True, check=False
-    )
-
-
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The project's pure-Python wheel, built into a temporary directory."""
+    """The project's wheel, built by hatchling (the build backend) into a temporary dir."""
     out = tmp_path_factory.mktemp("dist")
-    done = _build(out, PYROBOTS_AIO_BUILD="python")
+    build = [sys.executable, "-m", "hatchling", "build", "--target", "wheel", "--directory", out]
+    done = subprocess.run(build, cwd=ROOT, capture_output=True, text=True, check=False)
     assert done.returncode == 0, (
         f"building the wheel failed (hatchling comes with the 'test' extra):\n{done.stderr}"
     )
@@ -40,35 +27,18 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return built
 
 
-def _extension_modules(wheel: Path) -> list[str]:
+def test_the_wheel_is_pure_python_for_any_platform(wheel: Path) -> None:
+    """One ``py3-none-any`` wheel (STYLE 16b): no compiled module, no C source."""
+    assert wheel.name.endswith("-py3-none-any.whl")
     with zipfile.ZipFile(wheel) as archive:
-        return [name for name in archive.namelist() if name.endswith((".so", ".pyd"))]
-
-
-def test_a_pure_python_wheel_is_for_any_platform(wheel: Path) -> None:
-    assert wheel.name == "pyrobots_aio-0.1.0-py3-none-any.whl"
-    assert _extension_modules(wheel) == []
-
-
-def test_a_failed_compile_falls_back_to_python_with_a_warning(tmp_path: Path) -> None:
-    done = _build(tmp_path, PYROBOTS_AIO_BUILD="auto", CC="false")  # a compiler that fails
-    assert done.returncode == 0, done.stderr
-    assert "building the pure-Python wheel, the compiled core failed" in done.stderr
-    (built,) = tmp_path.glob("pyrobots_aio-*.whl")
-    assert built.name.endswith("-py3-none-any.whl")
-    assert _extension_modules(built) == []
-
-
-def test_a_failed_compile_fails_the_build_when_compiled_is_asked_for(tmp_path: Path) -> None:
-    done = _build(tmp_path, PYROBOTS_AIO_BUILD="compiled", CC="false")
-    assert done.returncode != 0
-    assert list(tmp_path.glob("*.whl")) == []
-
-
-def test_an_unknown_build_choice_is_refused(tmp_path: Path) -> None:
-    done = _build(tmp_path, PYROBOTS_AIO_BUILD="fast")
-    assert done.returncode != 0
-    assert "PYROBOTS_AIO_BUILD='fast': expected one of auto, compiled, python" in done.stderr
+        names = archive.namelist()
+        (metadata,) = (name for name in names if name.endswith(".dist-info/WHEEL"))
+        lines = archive.read(metadata).decode().splitlines()
+    assert [line for line in lines if line.startswith(("Tag:", "Root-Is-Purelib:"))] == [
+        "Root-Is-Purelib: true",
+        "Tag: py3-none-any",
+    ]
+    assert [name for name in names if name.endswith((".so", ".pyd", ".c"))] == []
 
 
 def test_the_wheel_ships_the_models(wheel: Path) -> None:

@@ -8,7 +8,6 @@ import types
 from collections.abc import Generator
 
 import pytest
-from build_support import trampolines
 
 from pyrobots_aio import (
     ActionCancelled,
@@ -21,12 +20,10 @@ from pyrobots_aio import (
     lock,
 )
 from pyrobots_aio.actions import current_action
-from pyrobots_aio.actions._pause import PyStepped, hold
+from pyrobots_aio.actions._pause import Stepped
 from pyrobots_aio.testing import EventLog
 
 pytestmark = pytest.mark.virtual_time
-
-TRAMPOLINES = pytest.mark.parametrize("trampoline", trampolines())
 
 ARM = Resource("arm")
 
@@ -250,10 +247,7 @@ def exchange(log: list[str]) -> Generator[str, str, None]:
 
 
 @pytest.mark.asyncio
-@TRAMPOLINES
-async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws(
-    trampoline: type[PyStepped[None]],
-) -> None:
+async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws() -> None:
     log: list[str] = []
 
     async def body() -> None:
@@ -262,7 +256,7 @@ async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws(
     async with Robot() as robot:
         handle = ticker(robot, [])  # a running action: the trampoline's handle
         await robot.sleep(0)
-        stepped = trampoline(hold, handle._executive, handle, body())
+        stepped = Stepped(handle, body())
         assert next(stepped) == "hello"
         handle.pause()
         thaw = stepped.send("world")  # frozen: kept, and the task gets the thaw future
@@ -278,10 +272,7 @@ async def test_a_value_sent_while_frozen_reaches_the_body_when_it_thaws(
 
 
 @pytest.mark.asyncio
-@TRAMPOLINES
-async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body(
-    trampoline: type[PyStepped[None]],
-) -> None:
+async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body() -> None:
     log: list[str] = []
 
     async def body() -> None:
@@ -299,7 +290,7 @@ async def test_the_trampoline_passes_throw_in_every_form_and_close_to_the_body(
         # What a task does and what `yield from` delegation does: an instance, a type, or
         # a type with its value and traceback.
         for throw_args in [(KeyError("a"),), (KeyError,), (KeyError, KeyError("c"), None)]:
-            stepped = trampoline(hold, handle._executive, handle, body())
+            stepped = Stepped(handle, body())
             assert isinstance(next(stepped), asyncio.Future)
             assert isinstance(stepped.throw(*throw_args), asyncio.Future)  # caught, awaits again
             stepped.close()

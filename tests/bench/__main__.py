@@ -14,8 +14,6 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from pyrobots_aio.actions._build import BUILD
-
 if TYPE_CHECKING:
     from collections.abc import Callable
 
@@ -64,8 +62,7 @@ def main(argv: list[str]) -> int:
         print(f"running {name} ...", flush=True)
         module = importlib.import_module(f"tests.bench.{name}")
         results[name.removeprefix("bench_")] = module.run()
-    print(f"\nthe actions core: {BUILD} (nox -s bench measures the wheel's build)")
-    print(f"{'figure':48} {'value':>14}  goal")
+    print(f"\n{'figure':48} {'value':>14}  goal")
     for group, figures in results.items():
         print(f"[{group}]")
         for key, value in figures.items():
@@ -74,12 +71,7 @@ def main(argv: list[str]) -> int:
             print(f"  {key:46} {value:14.3f}  {goal}{mark}")
     OUT.write_text(
         json.dumps(
-            {
-                "python": sys.version,
-                "machine": platform.platform(),
-                "build": BUILD,
-                "results": results,
-            },
+            {"python": sys.version, "machine": platform.platform(), "results": results},
             indent=2,
         )
     )

@@ -8,7 +8,6 @@ import logging
 import pytest
 
 from pyrobots_aio import ActionCancelled, Robot, action
-from pyrobots_aio.actions._build import BUILD
 
 pytestmark = pytest.mark.virtual_time
 
@@ -73,9 +72,7 @@ async def test_debug_on_one_robot_passes_its_records_whatever_the_logger_level(
     assert _warnings_of(caplog) == ["action stubborn#1"]
     record = next(r for r in caplog.records if "still running" in r.getMessage())
     assert record.name == "pyrobots_aio.actions"
-    # The library's call site, not the log scope's; compiled code has no frames: the
-    # nearest Python one, the loop's call of the watchdog's timer.
-    assert record.funcName == ("_overdue" if BUILD == "python" else "_run")
+    assert record.funcName == "_overdue"  # the library's call site, not the log scope's
 
 
 def test_loglevel_takes_names_and_numbers_and_refuses_the_rest() -> None:

@@ -10,7 +10,6 @@ import threading
 import pytest
 
 from pyrobots_aio import Robot, action
-from pyrobots_aio._core import _signals
 
 
 def _handlers() -> tuple[object, object]:
@@ -128,30 +127,3 @@ async def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts(
 def test_handle_signals_must_be_a_bool(value: object) -> None:
     with pytest.raises(TypeError, match=r"handle_signals must be True or False, got"):
         Robot(handle_signals=value)  # type: ignore[arg-type]
-
-
-@pytest.mark.asyncio
-async def test_the_executive_names_its_actions_not_started_yet_to_the_signal_handling() -> None:
-    """A second signal must not cancel an action's task before its first step.
-
-    The task would end without winding the action up. A compiled action task's
-    coroutine cannot say whether it started, so the executive names those tasks.
-    """
-    loop = asyncio.get_running_loop()
-
-    def unstarted() -> set[asyncio.Task[object]]:
-        return {task for finder in _signals._finders for task in finder(loop)}
-
-    @action
-    async def idle(robot: Robot) -> None:
-        await robot.sleep(3600)
-
-    before = list(_signals._finders)
-    async with Robot(handle_signals=False) as robot:
-        handle = idle(robot)
-        assert handle._task is not None
-        assert handle._task in unstarted()  # created, not run yet
-        await asyncio.sleep(0)
-        assert handle._task not in unstarted()  # its body has begun
-        handle.cancel()
-    assert _signals._finders == before  # the robot's finder went with it

@@ -39,13 +39,10 @@ import functools
 import inspect
 import logging
 import signal
-from typing import TYPE_CHECKING, Any, Self
+from typing import TYPE_CHECKING, Self
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable
     from types import TracebackType
-
-    UnstartedFinder = Callable[[asyncio.AbstractEventLoop], Iterable[asyncio.Task[Any]]]
 
 _log = logging.getLogger("pyrobots_aio.signals")
 
@@ -69,20 +66,7 @@ def _takes_over(signum: int, handler: object) -> bool:
     return handler is signal.SIG_DFL
 
 
-_finders: list[UnstartedFinder] = []
-
-
-def track_unstarted(finder: UnstartedFinder) -> Callable[[], None]:
-    """Have ``finder(loop)`` name tasks on ``loop`` not started yet; return how to stop.
-
-    For tasks whose coroutine cannot tell (a compiled one has no
-    ``cr_frame``): the executive names its actions' tasks this way.
-    """
-    _finders.append(finder)
-    return functools.partial(_finders.remove, finder)
-
-
-def _started(task: asyncio.Task[object], unstarted: set[asyncio.Task[Any]]) -> bool:
+def _started(task: asyncio.Task[object]) -> bool:
     """Whether ``task`` has begun to run its coroutine.
 
     A task cancelled before its first step never runs a line of it: an action's
@@ -90,8 +74,6 @@ def _started(task: asyncio.Task[object], unstarted: set[asyncio.Task[Any]]) -> b
     the action would wait forever. A task not yet started is left to start; an
     action of a cancelled parent sees the cancellation when it does.
     """
-    if task in unstarted:
-        return False
     coro = task.get_coro()
     return not inspect.iscoroutine(coro) or inspect.getcoroutinestate(coro) != "CORO_CREATED"
 
@@ -151,9 +133,8 @@ class SignalStop:
         that follow cut that cleanup short too.
         """
         assert self._loop is not None
-        unstarted = {task for finder in _finders for task in finder(self._loop)}
         for task in asyncio.all_tasks(self._loop):
-            if _started(task, unstarted):
+            if _started(task):
                 self._cancel(task, reason)
         if passes > 1:
             self._loop.call_soon(self._cut, reason, passes - 1)

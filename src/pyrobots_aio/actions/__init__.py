@@ -1,10 +1,9 @@
 """Actions: ``@action``, handles, outcomes and the executive that runs them."""
 
-from . import _build as _build  # seals the compiled classes
-from ._action import action as action
 from ._context import current_action as current_action
 from ._decorator import Action as Action
 from ._decorator import BoundAction as BoundAction
+from ._decorator import action as action
 from ._executive import Executive as Executive
 from ._handle import ActionHandle as ActionHandle
 from ._handle import ActionState as ActionState

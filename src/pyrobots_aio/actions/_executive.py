@@ -23,7 +23,6 @@ from .._core._instrument import EventKind, ExecEvent, Instruments
 from .._core._logging import LogScope
 from .._core._loops import clock_of, running_here, wrong_loop
 from .._core._numbers import finite
-from .._core._signals import track_unstarted
 from .._core._waiting import Countdown, wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
 from ._context import current_action
@@ -37,7 +36,7 @@ from ._pause import (
     thaw,
     thaw_subtree,
 )
-from ._phases import DONE, PENDING
+from ._phases import DONE
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
@@ -61,7 +60,7 @@ class Executive:
         instruments: Instruments | None = None,
         log: LogScope | None = None,
     ) -> None:
-        check_options(max_actions, cancel_grace)
+        _check_options(max_actions, cancel_grace)
         self.owner = owner
         self.max_actions = max_actions
         self.cancel_grace = float(cancel_grace)
@@ -79,7 +78,6 @@ class Executive:
         self._next_id = 1
         self._watch: deque[tuple[float, int, ActionHandle[Any]]] = deque()
         self._watch_timer: asyncio.TimerHandle | None = None
-        self._untrack: Callable[[], None] | None = None  # between open() and close()
         self._closing = False
         self.paused = 0
         """How many actions are paused or suspended now (0: nothing is frozen, the fast path)."""
@@ -105,16 +103,6 @@ class Executive:
         self.thread = threading.current_thread().name
         self.thread_ident = get_ident()
         self.clock = clock_of(loop)
-        if self._untrack is None:
-            self._untrack = track_unstarted(self._unstarted)
-
-    def _unstarted(self, loop: asyncio.AbstractEventLoop) -> list[asyncio.Task[None]]:
-        """The tasks of this executive's actions on ``loop`` whose body has not begun yet."""
-        if loop is not self._loop:
-            return []
-        return [
-            h._task for h in self._running.values() if h._phase == PENDING and h._task is not None
-        ]
 
     def check_loop(self, what: str) -> asyncio.AbstractEventLoop:
         """The robot's loop; `EventLoopError` if the caller is on another thread or loop."""
@@ -151,9 +139,6 @@ class Executive:
             self._watch.clear()
             self._loop = None
             self._closing = False
-            if self._untrack is not None:
-                self._untrack()
-                self._untrack = None
 
     # -- starting ---------------------------------------------------------
 
@@ -510,13 +495,8 @@ class Executive:
         self.instruments.emit(ExecEvent(kind, self.loop.time(), handle.id, handle.name, data))
 
 
-def check_options(max_actions: object, cancel_grace: object) -> None:
-    """Raise ValueError, naming the value and the fix, for bad executive options.
-
-    The robot checks them before it makes its executive: compiled (a wheel's
-    build), `Executive` refuses an argument of the wrong type with mypyc's
-    TypeError before its own check can name it.
-    """
+def _check_options(max_actions: object, cancel_grace: object) -> None:
+    """Raise ValueError, naming the value and the fix, for bad executive options."""
     if max_actions is not None and (
         isinstance(max_actions, bool) or not isinstance(max_actions, int) or max_actions < 1
     ):

@@ -15,13 +15,14 @@ from __future__ import annotations
 import asyncio
 import enum
 import traceback
+import weakref
 from threading import get_ident
 from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 from .._core._loops import running_here, wrong_loop
 from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
 from ._context import current_action
-from ._pause import Stepped, frozen, frozen_time, hold
+from ._pause import Stepped, frozen, frozen_time
 from ._phases import DONE, FINISHING, PENDING, RUNNING
 from ._where import definition, location
 
@@ -93,6 +94,7 @@ class ActionHandle(Generic[T]):
     """
 
     __slots__ = (
+        "__weakref__",
         "_callbacks",
         "_cancel_by",
         "_cancel_reason",
@@ -164,7 +166,7 @@ class ActionHandle(Generic[T]):
         self._callbacks: list[Callable[[ActionHandle[T]], object]] | None = None
         self._internal: list[Callable[[ActionHandle[T]], object]] | None = None
         self._finalizers: list[Callable[[], None]] | None = None
-        self._unretrieved: _Unretrieved | None = None
+        self._unretrieved: weakref.finalize[Any, Any] | None = None
         self._paused = False
         self._pause_reason: str | None = None
         self._paused_by: ActionHandle[Any] | None = None
@@ -573,18 +575,19 @@ class ActionHandle(Generic[T]):
         """Log the failure once this handle is forgotten, unless its error was retrieved.
 
         Like asyncio's "exception was never retrieved": a handle kept and awaited
-        later is not reported. The report is written now and held by an object
-        only this handle refers to, which logs it when it goes with the handle:
-        the error may refer back to this handle (a child's ActionInterrupted, a
-        traceback's frames), which would keep it alive.
+        later is not reported. The report is written now and the finalizer holds
+        only its text: the error may refer back to this handle (a child's
+        ActionInterrupted, a traceback's frames), which would keep it alive.
         """
         error = self._error
         report = "".join(traceback.format_exception(error)).rstrip() if error is not None else ""
-        self._unretrieved = _Unretrieved(self._executive.log, self.name, self.id, report)
+        self._unretrieved = weakref.finalize(
+            self, _report_failure, self._executive.log, self.name, self.id, report
+        )
 
     def _retrieved(self) -> None:
         if self._unretrieved is not None:
-            self._unretrieved.report = None
+            self._unretrieved.detach()
             self._unretrieved = None
 
     def _run_finalizers(self) -> None:
@@ -622,7 +625,7 @@ async def drive(  # noqa: PLR0912 (one flat coroutine: every action pays for eac
             if executive.instruments.items:
                 executive.started(handle)
             try:
-                value = await cast("Awaitable[T]", Stepped(hold, executive, handle, coro))
+                value = await cast("Awaitable[T]", Stepped(handle, coro))
             except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
                 handle._settle(Outcome.FAILED, error=exc)
                 handle._complete()
@@ -698,29 +701,8 @@ def _from_the_body(error: BaseException) -> TracebackType | None:
 _OWN_MODULES = frozenset({__name__, frozen.__module__})  # the task's and the trampoline's
 
 
-class _Unretrieved:
-    """The report of a failure nobody retrieved: logged when this goes (with its handle).
-
-    Not a ``weakref.finalize`` on the handle: a handle is compiled in a built
-    install, and weak references to compiled generic classes are unsafe there.
-    """
-
-    __slots__ = ("ident", "log", "name", "report")
-
-    def __init__(self, log: ScopedLogger, name: str, ident: int, report: str) -> None:
-        self.log = log
-        self.name = name
-        self.ident = ident
-        self.report: str | None = report  # None once the error was retrieved
-
-    def __del__(self) -> None:
-        if self.report is not None:
-            self.log.error(
-                "action %s#%d failed and nobody retrieved its error:\n%s",
-                self.name,
-                self.ident,
-                self.report,
-            )
+def _report_failure(log: ScopedLogger, name: str, ident: int, report: str) -> None:
+    log.error("action %s#%d failed and nobody retrieved its error:\n%s", name, ident, report)
 
 
 def _schedule(callback: Callable[[ActionHandle[Any]], object], handle: ActionHandle[Any]) -> None:

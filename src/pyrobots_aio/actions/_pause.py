@@ -24,9 +24,8 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 from ._phases import DONE
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Coroutine, Iterator
+    from collections.abc import Coroutine, Iterator
 
-    from ._executive import Executive
     from ._handle import ActionHandle
 
 T = TypeVar("T")
@@ -69,66 +68,53 @@ def subtree(handle: ActionHandle[Any]) -> Iterator[ActionHandle[Any]]:
         stack.extend(reversed(node._children))
 
 
-def hold(handle: ActionHandle[Any]) -> asyncio.Future[None] | None:
-    """The future the task waits on while ``handle`` is frozen (marked as blocking), else None."""
-    if not frozen(handle):
-        return None
-    thaw = handle._thaw
-    if thaw is None or thaw.done():
-        thaw = handle._thaw = handle._loop.create_future()
-    thaw._asyncio_future_blocking = True  # what ``yield from thaw`` would set
-    return thaw
-
-
-class PyStepped(Generic[T]):
+class Stepped(Generic[T]):
     """The body ``coro``, awaited through this: each resumption held while ``handle`` is frozen.
 
     An iterator that the action's task awaits in the body's place: it forwards
-    each ``send``/``throw`` to the body, unless the action is frozen (``hold``
-    gives the thaw future then; it is asked only while ``executive.paused``).
-    Then it keeps the value meant for the body and hands the task the thaw
+    each ``send``/``throw`` to the body, unless the action is frozen. Then it
+    keeps the value meant for the body and hands the task the action's thaw
     future; when that completes, the kept value goes on to the body. An
     exception thrown in (cancellation) goes on to the body at once, frozen or
     not. A class, not a generator: no frame of its own in the body's
-    tracebacks. `Stepped` is the C build of this (``_stepped.c``) where there
-    is one; this is the one everywhere else, and the reference for both.
+    tracebacks, and it compiles to a native iterator.
     """
 
-    __slots__ = ("_coro", "_executive", "_handle", "_held", "_hold", "_thawing")
+    __slots__ = ("_coro", "_executive", "_handle", "_held", "_thawing")
 
-    def __init__(
-        self,
-        hold: Callable[[ActionHandle[Any]], asyncio.Future[None] | None],
-        executive: Executive,
-        handle: ActionHandle[Any],
-        coro: Coroutine[Any, Any, T],
-    ) -> None:
-        self._hold = hold
-        self._executive = executive
+    def __init__(self, handle: ActionHandle[Any], coro: Coroutine[Any, Any, T]) -> None:
         self._handle = handle
+        self._executive = handle._executive
         self._coro = coro
         self._held: Any = None  # the value the body gets when it thaws
         self._thawing = False  # the task waits for the thaw future
 
-    def __await__(self) -> PyStepped[T]:
+    def __await__(self) -> Stepped[T]:
         return self
 
-    def __iter__(self) -> PyStepped[T]:
+    def __iter__(self) -> Stepped[T]:
         return self
 
     def __next__(self) -> Any:
-        return self.send(None)
+        if self._thawing or (self._executive.paused and frozen(self._handle)):
+            return self.send(None)
+        return self._coro.send(None)
 
     def send(self, value: Any) -> Any:
         """Resume the body with ``value``, or hand the task the thaw future while it is frozen."""
         if self._thawing:  # the thaw future is done: the kept value, once the action thaws
-            value, self._held, self._thawing = self._held, None, False
-        if self._executive.paused:
-            thaw = self._hold(self._handle)
-            if thaw is not None:
-                self._held = value
-                self._thawing = True
-                return thaw
+            value = self._held
+        handle = self._handle
+        if self._executive.paused and frozen(handle):
+            self._held = value
+            self._thawing = True
+            thaw = handle._thaw
+            if thaw is None or thaw.done():
+                thaw = handle._thaw = handle._loop.create_future()
+            thaw._asyncio_future_blocking = True  # what ``yield from thaw`` would set
+            return thaw
+        self._thawing = False
+        self._held = None
         return self._coro.send(value)
 
     def throw(self, kind: Any, value: Any = None, traceback: Any = None) -> Any:
@@ -150,15 +136,6 @@ class PyStepped(Generic[T]):
         self._thawing = False
         self._held = None
         self._coro.close()
-
-
-if TYPE_CHECKING:
-    Stepped = PyStepped
-else:
-    try:
-        from ._stepped import Stepped
-    except ImportError:  # no C build here (an editable install, no compiler): the same in Python
-        Stepped = PyStepped
 
 
 def freeze(

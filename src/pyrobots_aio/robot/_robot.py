@@ -24,7 +24,6 @@ from .._core._waiting import sleep_until
 from .._exceptions import ActionDefinitionError, ActionError, EventLoopError, PyRobotsError
 from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
 from ..actions import render_tree as _render_tree
-from ..actions._executive import check_options
 from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager
@@ -115,7 +114,6 @@ class Robot(StateMethods, EmergencyStop):
         for instrument in instruments:
             self.instruments.add(instrument)
         self._log_scope = LogScope()
-        check_options(max_actions, cancel_grace)
         self._executive = Executive(
             self,
             max_actions=max_actions,
