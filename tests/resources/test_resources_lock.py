@@ -628,3 +628,41 @@ async def test_a_decorator_hiding_the_lock_makes_it_hold_for_the_call_only() -> 
         await hidden_parent(robot, stopped)
         assert stopped == [None]
         assert robot.resources.owner(WHEELS) is None
+
+
+GRIPPER, CAMERA = Resource(), Resource()  # unnamed, as pyRobots lets you declare them
+
+
+@action
+@lock(GRIPPER)
+async def grip(robot: Arms) -> None:
+    await robot.gate.wait()
+
+
+@action
+@lock(GRIPPER, wait=False)
+async def poke(robot: Arms) -> None:
+    robot.log.append("poke")
+
+
+@action
+@lock(CAMERA, wait=False)
+async def snap(robot: Arms) -> None:
+    robot.log.append("snap")
+
+
+@pytest.mark.asyncio
+async def test_unnamed_resources_lock_like_named_ones_and_never_each_other() -> None:
+    async with Arms() as robot:
+        holder = grip(robot)
+        await settle()
+        with pytest.raises(ActionSkipped) as skipped:
+            await poke(robot)
+        await snap(robot)  # another unnamed resource: free
+        assert robot.resources.owner(GRIPPER) is holder
+        robot.gate.set()
+        await holder
+    assert robot.log == ["snap"]
+    assert str(skipped.value) == (
+        f"skipped: resource {GRIPPER.name!r} is busy (held by grip#{holder.id})"
+    )

@@ -119,3 +119,30 @@ def test_empty_compound_and_bad_names_are_rejected() -> None:
     assert str(info.value) == "a resource name must be a non-empty string, got 3"
     with pytest.raises(InvalidResourceError, match=r"got 7$"):
         CompoundResource(L_ARM, name=7)  # type: ignore[arg-type]
+
+
+def test_a_resource_without_a_name_gets_a_generated_one_and_its_repr_says_so() -> None:
+    first, second = Resource(), Resource()
+    number = int(first.name.removeprefix("resource-"))
+    assert (first.name, second.name) == (f"resource-{number}", f"resource-{number + 1}")
+    assert (first.generated, second.generated, L_ARM.generated) == (True, True, False)
+    assert first != second  # compared by name: two unnamed resources never clash
+    assert first == first  # noqa: PLR0124 (by value, as any resource)
+    assert repr(first) == f"<Resource 'resource-{number}' (name generated)>"
+    both = CompoundResource(first, L_ARM)
+    assert both.name == f"resource-{number}+l_arm"
+    assert repr(both) == (
+        f"CompoundResource(<Resource 'resource-{number}' (name generated)>, Resource('l_arm'), "
+        f"name='resource-{number}+l_arm')"
+    )
+
+
+def test_an_explicit_name_of_the_generated_form_is_refused() -> None:
+    with pytest.raises(InvalidResourceError) as info:
+        Resource("resource-3")
+    assert str(info.value) == (
+        "resource names of the form resource-<number> are kept for generated names, got "
+        "'resource-3'; give another name, e.g. Resource('arm'), or none to have one generated"
+    )
+    assert Resource("resource-x").name == "resource-x"  # only a number after the prefix is kept
+    assert Resource("my-resource-3").name == "my-resource-3"

@@ -43,16 +43,63 @@ def _warnings_of(caplog: pytest.LogCaptureFixture) -> list[str]:
 
 
 @pytest.mark.asyncio
-async def test_silencing_one_robot_leaves_the_other_s_records(
+async def test_a_level_set_on_one_robot_leaves_the_other_s_records(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     quiet, loud = Robot(cancel_grace=1.0), Robot(cancel_grace=1.0)
-    quiet.silent()
+    quiet.loglevel(logging.ERROR)
     async with quiet, loud:
         await _warn_once(quiet)
         await _warn_once(loud)
     assert _warnings_of(caplog) == ["action stubborn#1"]  # loud's; quiet's was dropped
     assert logging.getLogger("pyrobots_aio").level == logging.NOTSET  # no logger touched
+
+
+def _broken() -> None:
+    raise ValueError("servo unplugged")
+
+
+async def _say_a_bit_of_everything(robot: Robot) -> None:
+    """Make the library log about ``robot`` at every level, DEBUG to ERROR."""
+    robot._log_scope.logger("pyrobots_aio.robot").debug("a detail")
+    robot.state.bumper = False
+    robot.whenever("bumper", becomes=True).do(_broken)  # ERROR, at the next loop iteration
+    robot.state.bumper = True
+    await robot.emergency_stop("operator")  # WARNING, at once
+    robot.clear_emergency_stop()  # INFO
+    nap(robot)  # forgot 'await': a WARNING at exit
+
+
+@pytest.mark.asyncio
+async def test_silent_keeps_what_went_wrong_and_drops_info_and_debug_of_that_robot_only(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.DEBUG, logger="pyrobots_aio")  # the user's handlers take it all
+    quiet, loud = Robot(), Robot()
+    quiet.silent()  # pyRobots: an alias for loglevel(WARNING)
+    async with quiet:
+        await _say_a_bit_of_everything(quiet)
+    async with loud:
+        await _say_a_bit_of_everything(loud)
+    said = [
+        (r.levelname, r.getMessage())
+        for r in caplog.records
+        if r.name.startswith("pyrobots_aio.") and r.name != "pyrobots_aio.watchdog"
+    ]
+    went_wrong = [
+        ("WARNING", "emergency stop: operator; preempting nothing"),
+        ("ERROR", "callback _broken of monitor 'bumper becomes=True' failed"),
+        ("WARNING", "action nap#2 is cancelled by the robot's exit before it ever ran, and "
+         "nothing waits for it: a missing 'await'? (await the handle before leaving "
+         "'async with robot:')"),
+    ]  # fmt: skip
+    assert said == [
+        *went_wrong,
+        ("DEBUG", "a detail"),
+        *went_wrong[:2],
+        ("INFO", "emergency stop cleared (it was: operator)"),
+        went_wrong[2],
+    ]
 
 
 @pytest.mark.asyncio

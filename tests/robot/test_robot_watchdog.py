@@ -246,19 +246,27 @@ def test_the_threshold_is_a_number_of_seconds() -> None:
         Robot().block_threshold = 0.5  # type: ignore[misc]
 
 
+@pytest.mark.parametrize(
+    ("level", "said"),
+    [(logging.WARNING, [logging.WARNING]), (logging.ERROR, [])],
+    ids=["silent", "errors-only"],
+)
 @pytest.mark.asyncio
-async def test_a_silent_robot_s_watchdog_says_nothing_but_still_records(
-    reports: Reports,
+async def test_a_quiet_robot_s_watchdog_still_warns_unless_told_errors_only_and_records(
+    reports: Reports, level: int, said: list[int]
 ) -> None:
     events = EventLog()
     async with Robot(instruments=[events], block_threshold=0.05) as robot:
-        robot.silent()
+        if level == logging.WARNING:
+            robot.silent()  # pyRobots' loglevel(WARNING): a block report is what went wrong
+        else:
+            robot.loglevel(level)
         watch, deadline = robot._blockwatch, time.monotonic() + BOUND
         assert watch is not None
         while watch.blocks == 0 and time.monotonic() < deadline:  # a block until it is seen
             time.sleep(0.01)  # noqa: ASYNC251 (the block itself)
         await asyncio.sleep(0)
-    assert reports.records == []
+    assert [r.levelno for r in reports.records] == said  # not the INFO "turned again"
     assert len(_blocked(events)) == 1
 
 

@@ -9,9 +9,10 @@ happen.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, assert_type
 
-from pyrobots_aio import ActionHandle, Outcome, Resource, Robot, action, lock
+from pyrobots_aio import ActionHandle, EventMonitor, Outcome, Resource, Robot, action, lock
 
 
 @action
@@ -81,3 +82,11 @@ async def locks_take_suspend_and_aging(robot: Robot) -> None:
     assert_type(robot.resources.aging, float | None)
     robot.resources.aging = 2.0
     assert_type(robot.resources.lenders(WHEELS), list[ActionHandle[Any]])
+
+
+def pyrobots_habits(robot: Robot) -> None:
+    """``.do()`` chains on the monitor itself; ``Resource()`` needs no name."""
+    monitor = robot.whenever("bumper", becomes=True).do(print, "ouch").do(walk, 0.2)
+    assert_type(monitor, EventMonitor)
+    assert_type(monitor.callbacks, tuple[Callable[..., object], ...])
+    assert_type(Resource().generated, bool)

@@ -44,9 +44,9 @@ class LogScope:
     Example:
         >>> scope = LogScope()
         >>> log = scope.logger("pyrobots_aio.actions")
-        >>> scope.level = logging.CRITICAL + 1  # silent: this robot's records are dropped
-        >>> log.isEnabledFor(logging.ERROR)
-        False
+        >>> scope.level = logging.WARNING  # robot.silent(): what goes wrong, nothing else
+        >>> log.isEnabledFor(logging.ERROR), log.isEnabledFor(logging.INFO)
+        (True, False)
     """
 
     __slots__ = ("level",)

@@ -1,9 +1,11 @@
-"""Running a monitor's callback, and keeping every task a monitor owns.
+"""Running a monitor's callbacks, and keeping every task a monitor owns.
 
 A callback is started from the write that fired the monitor, but no user code
 runs inside the write: an action or a coroutine function only gets its task
 created (its body starts at the next loop iteration), a plain function is
-queued with ``call_soon``. Everything runs in the monitor's root context
+queued with ``call_soon``. A monitor's callbacks (``.do(a).do(b)``) start in
+the order given, each with its own failure log, so one that raises neither
+stops nor hides the others. Everything runs in the monitor's root context
 (``current_action`` is None), so an action callback belongs to the robot's
 root scope, whatever task wrote the state.
 """
@@ -40,8 +42,35 @@ def describe(callback: object, *, qualified: bool = True) -> str:
     return name if isinstance(name, str) else repr(callback)
 
 
+class Callback:
+    """One callback given to ``do()``: what to call, with what, and its own failure log."""
+
+    __slots__ = ("args", "failures", "fn", "kind", "label")
+
+    def __init__(
+        self, fn: Callable[..., Any], args: tuple[Any, ...], label: str, failures: FailureLog
+    ) -> None:
+        self.kind = _kind_of(fn)
+        self.fn, self.args, self.label, self.failures = fn, args, label, failures
+
+
+def _kind_of(fn: object) -> str:
+    """How to start ``fn``: as an action, a coroutine function's task, or a plain call."""
+    if isinstance(fn, Action | BoundAction):
+        return _ACTION
+    if inspect.iscoroutinefunction(fn):
+        return _COROUTINE
+    if callable(fn):
+        return _PLAIN
+    msg = (
+        f"do() takes an action, a coroutine function or a function, got {fn!r} "
+        f"({type(fn).__name__})"
+    )
+    raise TypeError(msg)
+
+
 class CallbackRunner:
-    """Starts one monitor's callback and keeps the tasks it owns until they end.
+    """Starts one monitor's callbacks and keeps the tasks it owns until they end.
 
     ``busy`` counts the callbacks in flight (queued, running, or their action
     not done); ``settled`` also waits for the monitor's own tasks (async
@@ -50,13 +79,11 @@ class CallbackRunner:
 
     __slots__ = (
         "_actions",
-        "_args",
-        "_callback",
+        "_callbacks",
         "_calls",
         "_context",
         "_failures",
         "_idle_waiters",
-        "_kind",
         "_log",
         "_loop",
         "_on_settled",
@@ -72,47 +99,41 @@ class CallbackRunner:
         context: Context,
         on_settled: Callable[[], None],
         log: ScopedLogger,
+        *,
+        label: str,
     ) -> None:
         self._loop = loop
         self._log = log
         self._failures = FailureLog(loop, log)
         self._robot = robot
         self._context = context
-        self.label = "a monitor's callback"  # what log messages call it
+        self.label = label  # what log messages call the monitor's own tasks
         self._on_settled = on_settled
-        self._callback: Callable[..., Any] | None = None
-        self._args: tuple[Any, ...] = ()
-        self._kind = _PLAIN
+        self._callbacks: list[Callback] = []
         self._calls: deque[asyncio.Handle] = deque()
-        self._tasks: dict[asyncio.Task[Any], bool] = {}  # task -> is a callback
+        self._tasks: dict[asyncio.Task[Any], Callback | None] = {}  # None: the monitor's own
         self._actions: set[ActionHandle[Any]] = set()
         self._idle_waiters: list[asyncio.Future[None]] = []
 
     @property
-    def callback(self) -> Callable[..., Any] | None:
-        """The callback given to ``do()``, or None."""
-        return self._callback
+    def callbacks(self) -> tuple[Callable[..., Any], ...]:
+        """The callbacks given to ``do()``, in order."""
+        return tuple(callback.fn for callback in self._callbacks)
 
-    def set(self, callback: object, args: tuple[Any, ...]) -> None:
-        """Register ``callback(*args)`` (an action, a coroutine function or a function)."""
-        if isinstance(callback, Action | BoundAction):
-            self._kind = _ACTION
-        elif inspect.iscoroutinefunction(callback):
-            self._kind = _COROUTINE
-        elif callable(callback):
-            self._kind = _PLAIN
-        else:
-            msg = (
-                f"do() takes an action, a coroutine function or a function, got {callback!r} "
-                f"({type(callback).__name__})"
-            )
-            raise TypeError(msg)
-        self._callback, self._args = callback, args
+    @property
+    def has_callbacks(self) -> bool:
+        """Whether ``do()`` gave any callback (cheaper than `callbacks`, for each firing)."""
+        return bool(self._callbacks)
+
+    def add(self, fn: Callable[..., Any], args: tuple[Any, ...]) -> None:
+        """Register ``fn(*args)`` (an action, a coroutine function or a function)."""
+        label = f"callback {describe(fn)} of {self.label}"
+        self._callbacks.append(Callback(fn, args, label, FailureLog(self._loop, self._log)))
 
     @property
     def busy(self) -> bool:
         """Whether a callback is queued or running."""
-        return bool(self._calls or self._actions or any(self._tasks.values()))
+        return bool(self._calls or self._actions or any(self._tasks.values()))  # None: own task
 
     @property
     def settled(self) -> bool:
@@ -122,31 +143,33 @@ class CallbackRunner:
     # -- starting -------------------------------------------------------------
 
     def start(self) -> None:
-        """Start one run of the callback; it begins at the next loop iteration."""
-        if self._kind == _PLAIN:
-            context = self._context.copy()
-            self._calls.append(self._loop.call_soon(self._call_plain, context=context))
-        elif self._kind == _COROUTINE:
-            assert self._callback is not None
-            self.track(self._callback(*self._args), callback=True)
-        else:
-            self._start_action()
+        """Start one run of every callback, in order; each begins at the next loop iteration."""
+        for callback in self._callbacks:
+            if callback.kind == _PLAIN:
+                context = self._context.copy()
+                handle = self._loop.call_soon(self._call_plain, callback, context=context)
+                self._calls.append(handle)
+            elif callback.kind == _COROUTINE:
+                self.track(callback.fn(*callback.args), callback)
+            else:
+                self._start_action(callback)
 
-    def track(self, coro: Any, *, callback: bool = False) -> asyncio.Task[Any]:
-        """Run ``coro`` as a task of this runner, in the monitor's context."""
-        task = self._loop.create_task(coro, name=self.label, context=self._context.copy())
+    def track(self, coro: Any, callback: Callback | None = None) -> asyncio.Task[Any]:
+        """Run ``coro`` as a task of this runner (of ``callback``, if given), in its context."""
+        name = self._label_of(callback)
+        task = self._loop.create_task(coro, name=name, context=self._context.copy())
         self._tasks[task] = callback
         task.add_done_callback(self._task_done)
         return task
 
-    def _start_action(self) -> None:
-        callback = self._callback
-        assert callback is not None
-        args = (self._robot, *self._args) if isinstance(callback, Action) else self._args
+    def _start_action(self, callback: Callback) -> None:
+        fn, args = callback.fn, callback.args
+        if isinstance(fn, Action):
+            args = (self._robot, *args)
         try:
-            handle = self._context.copy().run(callback, *args)
+            handle = self._context.copy().run(fn, *args)
         except Exception as error:
-            self._failures.report(f"{self.label} could not start its action", error)
+            callback.failures.report(f"{callback.label} could not start its action", error)
             return
         self._keep(handle)
 
@@ -155,25 +178,29 @@ class CallbackRunner:
         self._actions.add(handle)
         handle._on_done(self._action_done)
 
-    def _call_plain(self) -> None:
+    def _call_plain(self, callback: Callback) -> None:
         self._calls.popleft()
-        assert self._callback is not None
         try:
-            result = self._callback(*self._args)
+            result = callback.fn(*callback.args)
         except Exception as error:
-            self._failures.report(f"{self.label} failed", error)
+            callback.failures.report(f"{callback.label} failed", error)
         else:
             if inspect.iscoroutine(result):  # a function returning a coroutine: run it
-                self.track(result, callback=True)
+                self.track(result, callback)
             elif isinstance(result, ActionHandle):  # ``lambda: robot.say("hi")``: keep it
                 self._keep(result)
         self._check_settled()
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
-        self._tasks.pop(task, None)
+        callback = self._tasks.pop(task, None)
         if not task.cancelled() and (error := task.exception()) is not None:
-            self._failures.report(f"{self.label} failed", error)
+            failures = self._failures if callback is None else callback.failures
+            failures.report(f"{self._label_of(callback)} failed", error)
         self._check_settled()
+
+    def _label_of(self, callback: Callback | None) -> str:
+        """What logs call a task: its callback, or the monitor for the monitor's own tasks."""
+        return self.label if callback is None else callback.label
 
     def _action_done(self, handle: ActionHandle[Any]) -> None:
         self._actions.discard(handle)
@@ -209,12 +236,18 @@ class CallbackRunner:
             self._idle_waiters.append(fut)
         return fut
 
+    def flush_failures(self) -> None:
+        """Log the counts of failures not shown yet, the runner's and each callback's."""
+        self._failures.flush()
+        for callback in self._callbacks:
+            callback.failures.flush()
+
     def escalate(self, grace: float) -> None:
         """Cancel again, with a warning, every task still running a grace after cancellation."""
-        for task in self._tasks:
+        for task, callback in self._tasks.items():
             self._log.warning(
                 "%s still running %.3g s after cancellation, at %s; cancelling it again",
-                self.label,
+                self._label_of(callback),
                 grace,
                 location(task.get_coro()) or "an unknown place",
             )
@@ -222,11 +255,11 @@ class CallbackRunner:
 
     def abandon(self, grace: float) -> None:
         """Forget, with an error, what is still running two graces after cancellation."""
-        for task in self._tasks:
+        for task, callback in self._tasks.items():
             self._log.error(
                 "%s ignored cancellation for %.3g s, at %s; abandoning it (its task may "
                 "outlive the robot)",
-                self.label,
+                self._label_of(callback),
                 2 * grace,
                 location(task.get_coro()) or "an unknown place",
             )
@@ -288,7 +321,7 @@ async def settle(runners: Sequence[CallbackRunner], grace: float) -> None:
     """
     late = [r for r in runners if not r.settled]
     for runner in runners:
-        runner._failures.flush()
+        runner.flush_failures()
     if not late:
         return
     loop = asyncio.get_running_loop()

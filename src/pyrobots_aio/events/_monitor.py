@@ -42,10 +42,11 @@ class EventMonitor:
     """A condition over the robot's state, watched from creation until stopped.
 
     Created by ``robot.whenever()``, ``robot.every()`` and ``robot.on()``;
-    `do` registers what to run when it fires. A monitor is active from
-    creation: a level condition that already holds fires at the next loop
-    iteration, after a ``.do()`` chained to the creation has run; firings
-    before ``.do()`` run no callback (they still wake `wait`).
+    `do` registers what to run when it fires, and chains: ``.do(a).do(b)``
+    runs both. A monitor is active from creation: a level condition that
+    already holds fires at the next loop iteration, after the ``.do()`` calls
+    chained to the creation have run; firings before ``.do()`` run no
+    callback (they still wake `wait`).
 
     Example:
         >>> import asyncio
@@ -89,8 +90,9 @@ class EventMonitor:
         context = contextvars.copy_context()
         context.run(current_action.set, None)  # callbacks run in the robot's root scope
         loop = host.loop
-        self._runner = CallbackRunner(loop, host.robot, context, self._settled, host.log)
-        self._runner.label = f"monitor {self._name!r}"  # evaluations of an async predicate
+        self._runner = CallbackRunner(
+            loop, host.robot, context, self._settled, host.log, label=f"monitor {self._name!r}"
+        )
         period = 1.0 / max_firing_freq if max_firing_freq and not one_shot else 0.0
         self._trigger = Trigger(
             loop,
@@ -153,6 +155,11 @@ class EventMonitor:
         return self._firings
 
     @property
+    def callbacks(self) -> tuple[Callable[..., object], ...]:
+        """The callbacks given to `do`, in the order they start at each firing."""
+        return self._runner.callbacks
+
+    @property
     def running(self) -> bool:
         """Whether a callback is queued or running."""
         return self._runner.busy
@@ -175,7 +182,7 @@ class EventMonitor:
     # -- using ------------------------------------------------------------------------
 
     def do(self, callback: Callable[..., object], *args: Any) -> Self:
-        """Run ``callback(*args)`` at each firing; return this monitor.
+        """Run ``callback(*args)`` at each firing, after those already given; return this monitor.
 
         ``callback`` may be an action (started in the robot's root scope; an
         unbound action receives the robot first, as every action call does),
@@ -184,18 +191,17 @@ class EventMonitor:
         One that raises is logged on ``pyrobots_aio.events`` and the monitor
         goes on.
 
+        Calls chain, as in pyRobots: ``robot.whenever(...).do(a).do(b)``
+        starts ``a`` then ``b`` at each firing, both at the next loop
+        iteration (not ``b`` once ``a`` is done: one coroutine function
+        awaiting both does that). Each is isolated from the others: one that
+        raises is logged and the others run. With ``blocking=True`` a firing
+        is dropped while any of them still runs.
+
         Raises:
-            StateError: The monitor already has a callback.
             TypeError: ``callback`` is not callable.
         """
-        if self._runner.callback is not None:
-            msg = (
-                f"monitor {self._name!r} already calls {describe(self._runner.callback)}; "
-                "create another monitor for another callback"
-            )
-            raise StateError(msg)
-        self._runner.set(callback, args)
-        self._runner.label = f"callback {describe(callback)} of monitor {self._name!r}"
+        self._runner.add(callback, args)
         return self
 
     async def wait(self) -> Any:
@@ -239,7 +245,7 @@ class EventMonitor:
             self._rebase(value)
         self._firings += 1
         runner = self._runner
-        if runner.callback is None:
+        if not runner.has_callbacks:
             status = "none"
         elif self._blocking and runner.busy:
             status = "dropped"
@@ -287,8 +293,11 @@ class EventMonitor:
 
     def __repr__(self) -> str:
         state = "monitoring" if self._monitoring else "stopped"
-        callback = self._runner.callback
-        does = "" if callback is None else f", callback {describe(callback)}"
+        callbacks = self._runner.callbacks
+        does = ""
+        if callbacks:
+            plural = "s" if len(callbacks) > 1 else ""
+            does = f", callback{plural} {', '.join(describe(c) for c in callbacks)}"
         if self._runner.busy:
             does += " running"
         return f"<EventMonitor #{self._id} {self._name!r} {state}, fired {self._firings}{does}>"

@@ -7,18 +7,35 @@ robots in one process never share locks. Resources compare by value: two
 
 from __future__ import annotations
 
+import itertools
+import re
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
 from .._exceptions import InvalidResourceError
 
+GENERATED_PREFIX = "resource-"
+"""How generated names start: ``resource-1``, ``resource-2``, ... (explicit names may not)."""
+_GENERATED = re.compile(rf"{GENERATED_PREFIX}[0-9]+")
+# Process-wide on purpose: resources are declared at import time, before any robot exists,
+# and resources compare by name, so two unnamed ones must never get the same name.
+_numbers = itertools.count(1)
 
-@dataclass(frozen=True, slots=True)
+
+@dataclass(frozen=True, slots=True, init=False)
 class Resource:
     """A plain resource (the wheels, an arm) that one action at a time may drive.
 
     Args:
-        name: The resource's name, unique on the robot (resources compare by name).
+        name: The resource's name, unique on the robot (resources compare by
+            name). Without one (pyRobots' ``Resource()``), it gets a generated
+            name, ``resource-1``, ``resource-2``, ... in creation order, unique in
+            the process; its repr says the name was generated.
+
+    Raises:
+        InvalidResourceError: The name is not a non-empty string, or has the
+            form of a generated one (``resource-<number>``), which could clash
+            with an unnamed resource.
 
     Example:
         >>> WHEELS = Resource("wheels")
@@ -26,14 +43,29 @@ class Resource:
         Resource('wheels')
         >>> WHEELS == Resource("wheels")
         True
+        >>> Resource().generated, Resource() == Resource()
+        (True, False)
     """
 
     name: str
+    generated: bool = field(default=False, init=False, compare=False)
+    """Whether the name was generated (the resource was declared without one)."""
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            msg = f"a resource name must be a non-empty string, got {self.name!r}"
-            raise InvalidResourceError(msg)
+    def __init__(self, name: str | None = None) -> None:
+        generated = name is None
+        if name is None:
+            name = f"{GENERATED_PREFIX}{next(_numbers)}"
+        else:
+            _check_name(name)
+            if _GENERATED.fullmatch(name):
+                msg = (
+                    f"resource names of the form {GENERATED_PREFIX}<number> are kept for "
+                    f"generated names, got {name!r}; give another name, e.g. Resource('arm'), "
+                    "or none to have one generated"
+                )
+                raise InvalidResourceError(msg)
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "generated", generated)
 
     @property
     def leaves(self) -> tuple[Resource, ...]:
@@ -41,6 +73,8 @@ class Resource:
         return (self,)
 
     def __repr__(self) -> str:
+        if self.generated:
+            return f"<Resource {self.name!r} (name generated)>"
         return f"Resource({self.name!r})"
 
 
@@ -80,9 +114,8 @@ class CompoundResource:
             raise InvalidResourceError(msg)
         if name is None:
             name = "+".join(part.name for part in parts)
-        elif not isinstance(name, str) or not name:
-            msg = f"a resource name must be a non-empty string, got {name!r}"
-            raise InvalidResourceError(msg)
+        else:
+            _check_name(name)
         _reject_self(name, parts)
         leaves = dict.fromkeys(leaf for part in parts for leaf in part.leaves)
         object.__setattr__(self, "parts", parts)
@@ -108,6 +141,12 @@ def check_resource(value: object, what: str) -> AnyResource:
         f"declare it as {hint} or CompoundResource(...)"
     )
     raise InvalidResourceError(msg)
+
+
+def _check_name(name: object) -> None:
+    if not isinstance(name, str) or not name:
+        msg = f"a resource name must be a non-empty string, got {name!r}"
+        raise InvalidResourceError(msg)
 
 
 def _reject_self(name: str, parts: tuple[AnyResource, ...]) -> None:

@@ -481,8 +481,13 @@ class Robot(StateMethods, EmergencyStop):
         self.loglevel(logging.INFO)
 
     def silent(self) -> None:
-        """Log nothing from the library about this robot."""
-        self.loglevel(logging.CRITICAL + 1)
+        """Log only what goes wrong with this robot: ``WARNING`` and above, as in pyRobots.
+
+        ``INFO`` and ``DEBUG`` are dropped; warnings and errors stay (a missing
+        ``await``, the loop watchdog's block reports, the emergency stop, a
+        failing callback). ``loglevel(logging.CRITICAL + 1)`` drops everything.
+        """
+        self.loglevel(logging.WARNING)
 
     def __repr__(self) -> str:
         state = "running" if self.is_running else "stopped"
