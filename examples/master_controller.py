@@ -2,10 +2,12 @@
 
 The executive of a humanoid's integration module, built from the supervision
 parts instead of hand-written loops: a `StateMachine` runs the phases (the
-plan; after a fault, the recovery to a safe pose); a flaky step is `retry`-ed
-with exponential backoff; a `HealthMonitor` watches the camera stream. When
-the stream is lost, the emergency stop cuts the motors and preempts every
-action driving a limb; the plan fails, and the machine recovers.
+plan; after a fault, the recovery to a safe pose); flaky steps are `retry`-ed
+with exponential backoff, the walk under a `timeout` too; a `HealthMonitor`
+watches the camera stream. When the stream is lost, the emergency stop cuts
+the motors and ends the plan where it stands: the walk has slipped and its
+retry is waiting out its backoff, holding no limb, yet it is stopped and
+never walks again; the machine takes its failure path, the recovery.
 
 Run: ``python examples/master_controller.py``
 """
@@ -27,6 +29,7 @@ from pyrobots_aio import (
     exponential,
     lock,
     retry,
+    timeout,
 )
 from pyrobots_aio.cli import install_console_handler
 
@@ -44,11 +47,11 @@ log = logging.getLogger("master_controller")
 
 
 class Humanoid(Robot):
-    """A pretend humanoid: its steps only take time; ``lift`` fails twice, then works."""
+    """A pretend humanoid: its steps only take time; ``lift`` fails twice, the walk slips."""
 
     def __init__(self, instruments: Iterable[Instrument] = ()) -> None:
         super().__init__(dummy=True, instruments=instruments)
-        self.lift_attempts = 0
+        self.lift_attempts = self.walk_attempts = 0
         self.report: list[str] = []
 
     def note(self, line: str) -> None:
@@ -76,10 +79,16 @@ class Humanoid(Robot):
             raise RuntimeError(f"arm controller timeout (attempt {self.lift_attempts})")
         return f"cup lifted (attempt {self.lift_attempts})"
 
+    @retry(3, backoff=exponential(1.0, factor=2))  # 1 s, then 2 s between attempts
+    @timeout(10)
     @action
     @lock(LEGS)
     async def walk_to_table(self) -> str:
-        await self.sleep(5.0)
+        self.walk_attempts += 1
+        await self.sleep(1.0)
+        if self.walk_attempts == 1:
+            raise RuntimeError("slipped on the rug")
+        await self.sleep(4.0)
         return "at the table"
 
     @action

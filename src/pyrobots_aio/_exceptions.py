@@ -265,7 +265,9 @@ class EmergencyStopError(MotionError):
     """Motion refused: the robot's emergency stop is latched.
 
     Raised by ``drive`` and the motion actions of a `DriveBase` from
-    ``robot.emergency_stop(reason)`` until ``robot.clear_emergency_stop()``.
+    ``robot.emergency_stop(reason)`` until ``robot.clear_emergency_stop()``,
+    and by a `StateMachine` that a stop ended in a state with no FAILED
+    transition. `retry` never retries it.
 
     Attributes:
         reason: The reason the emergency stop was given.

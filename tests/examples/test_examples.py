@@ -153,8 +153,15 @@ async def test_master_controller() -> None:
     # the fault: the camera's last frame was at 74/30 s; stale 0.5 s later, the e-stop
     stop = log.first(EventKind.ACTION_SPAWNED, "emergency_stop")
     assert stop.time == pytest.approx(74 / 30 + 0.5)
+    # the walk slipped at 2.2 s: its retry was waiting out its 1 s backoff, holding no limb,
+    # when the stop cancelled it there; it never walked again
+    (retrying_walk, walk_attempt) = log.of_kind(EventKind.ACTION_SPAWNED, "walk_to_table")
+    assert walk_attempt.data["parent"] == retrying_walk.action
+    assert log.first(EventKind.ACTION_FINISHED, "walk_to_table").time == pytest.approx(2.2)
     walk = log.assert_cancelled("walk_to_table", by="emergency_stop", after=stop.time, within=0)
+    assert walk.action == retrying_walk.action
     assert walk.data["reason"] == "emergency stop: camera lost"
+    assert log.outcomes("walk_to_table") == ["failed", "cancelled"]
     # every action holding a limb at the e-stop ended before the recovery took the safe pose
     events = log.events
     safe_pose = events.index(log.first(EventKind.ACTION_STARTED, "go_to_safe_pose"))
@@ -163,11 +170,14 @@ async def test_master_controller() -> None:
     }
     released = {e.action for e in events[:safe_pose] if e.kind is EventKind.RESOURCE_RELEASED}
     assert acquired <= released
-    # the phases: the machine's states are its children, the plan failed, the recovery worked
+    # the phases: the machine's states are its children; the stop ended the plan, and the
+    # machine took its failure path (plan -> recover on FAILED): the recovery worked
     master = log.first(EventKind.ACTION_SPAWNED, "master").action
     phases = [e.name for e in log.of_kind(EventKind.ACTION_SPAWNED) if e.data["parent"] == master]
     assert phases == ["execute_plan", "recover"]
-    assert log.outcomes("execute_plan") == ["failed"]
+    plan = log.assert_cancelled("execute_plan", by="emergency_stop", after=stop.time, within=0)
+    assert plan.data["reason"] == "emergency stop: camera lost"
+    assert log.outcomes("execute_plan") == ["cancelled"]
     assert log.outcomes("master") == ["succeeded"]
     assert log.outcomes("go_to_safe_pose") == ["succeeded"]
     spawned_since = [

@@ -168,11 +168,11 @@ async def test_an_outcome_with_no_transition_ends_it() -> None:
 
 @pytest.mark.asyncio
 @pytest.mark.virtual_time
-async def test_an_emergency_stop_is_a_cancelled_outcome_to_recover_from() -> None:
+async def test_an_emergency_stop_takes_the_failure_path_to_recover() -> None:
     guarded = StateMachine(
         "guarded",
         {"work": Cell.work, "recover": Cell.repair, "stopped": None},
-        [("work", "recover", C), ("recover", "stopped", S)],
+        [("work", "recover", F), ("recover", "stopped", S)],
     )
     async with Cell() as robot:
         machine = guarded(robot)
@@ -180,7 +180,7 @@ async def test_an_emergency_stop_is_a_cancelled_outcome_to_recover_from() -> Non
         await robot.emergency_stop("operator")  # work holds the arm: preempted
         assert await machine == "stopped"
         assert robot.state.guarded_history == (
-            "work -> recover: cancelled: emergency stop: operator",
+            "work -> recover: emergency stop: operator",
             "recover -> stopped: succeeded",
         )
         assert robot.time() == 3.0

@@ -75,6 +75,7 @@ async def machines_and_health(robot: Robot) -> None:
     assert_type(health.start(), ActionHandle[None])
     assert_type(health.statuses(), dict[str, HealthStatus])
     assert_type(robot.emergency_stop("cliff"), ActionHandle[None])
+    robot.add_emergency_stop_callback(lambda reason: [machine(robot)])
 
 
 def wrong_calls_are_type_errors(robot: Robot, pr2: Pr2) -> None:
@@ -85,4 +86,5 @@ def wrong_calls_are_type_errors(robot: Robot, pr2: Pr2) -> None:
     retry(3)(pr2.wave)()  # type: ignore[call-arg]
     retry(2)(plain)(robot, "4")  # type: ignore[arg-type]
     robot.emergency_stop(42)  # type: ignore[arg-type]
+    robot.add_emergency_stop_callback(print)  # type: ignore[arg-type]  # it returns no actions
     When("bumper", becomes=True, sideways=1)  # type: ignore[call-arg]

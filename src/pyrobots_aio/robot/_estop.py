@@ -6,22 +6,29 @@ it: it latches, stops the actuators (`EmergencyStop.halt_actuators`; a
 `pyrobots_aio.DriveBase` stops its wheels), starts the ``emergency_stop``
 action in the robot's root scope, never refused by ``max_actions``, and
 cancels every action that holds or waits for a resource, whatever its lock
-priority, on that action's behalf. The action only waits until they are all
-done (their cleanup included). Motion stays refused (`EmergencyStopError`)
-until ``robot.clear_emergency_stop()``.
+priority, and every action a supervisor hands it (`add_emergency_stop_callback`:
+a ``retry`` hands its retrying action, a ``StateMachine`` its current state's),
+on that action's behalf. The action only waits until they are all done (their
+cleanup included). Motion stays refused (`EmergencyStopError`) until
+``robot.clear_emergency_stop()``.
 """
 
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import EmergencyStopError
-from ..actions import current_action
+from ..actions import ActionHandle, current_action
 
 if TYPE_CHECKING:
-    from ..actions import ActionHandle, Executive
+    from .._core._logging import ScopedLogger
+    from ..actions import Executive
     from ..state import StateStore
+
+StopCallback = Callable[[str], Iterable[ActionHandle[Any]]]
+"""A supervisor's part in the emergency stop: given the reason, the actions to stop too."""
 
 STOPPED_KEY = "emergency_stop"
 """State key: True while the emergency stop is latched (written at its first use)."""
@@ -35,6 +42,7 @@ class EmergencyStop:
     state: StateStore
     _executive: Executive
     _estop_reason: str | None = None
+    _estop_callbacks: dict[StopCallback, None] | None = None  # an ordered set, made at first use
 
     @property
     def emergency_stopped(self) -> bool:
@@ -61,8 +69,11 @@ class EmergencyStop:
         ``emergency_stop`` and ``emergency_stop_reason``), `halt_actuators`
         runs, and every action that holds or waits for a resource is cancelled
         with the reason ``"emergency stop: <reason>"``, whatever its lock
-        priority. Until `clear_emergency_stop`, ``drive`` and the motion
-        actions refuse to move (`EmergencyStopError`). The returned
+        priority, with its subtree; so are the supervised plans (a running
+        ``retry``, a ``StateMachine``'s current state: see
+        `add_emergency_stop_callback`). Until `clear_emergency_stop`,
+        ``drive`` and the motion actions refuse to move
+        (`EmergencyStopError`). The returned
         ``emergency_stop`` action (root scope, never refused by
         ``max_actions``) ends once those actions are done, cleanup included.
         Calling it again while latched preempts the holders of that moment
@@ -106,7 +117,7 @@ class EmergencyStop:
             self.halt_actuators()
         except Exception:
             log.exception("halt_actuators() failed during the emergency stop (%s)", reason)
-        holders = [h for h in executive.running() if h.held or h.awaiting]
+        holders = self._to_preempt(reason, log)
         log.warning(
             "emergency stop: %s; preempting %s",
             reason,
@@ -126,6 +137,27 @@ class EmergencyStop:
         _cancel(executive, holders, f"emergency stop: {reason}", handle)
         return handle
 
+    def add_emergency_stop_callback(self, callback: StopCallback) -> None:
+        """Call ``callback(reason)`` at each emergency stop; it returns more actions to stop.
+
+        How a supervisor takes part in the stop (`retry` hands over its
+        retrying action, a `StateMachine` its current state's action): at each
+        call of `emergency_stop`, once it has latched and halted the actuators,
+        ``callback`` gets that call's reason and returns the actions to cancel
+        with the resource holders (the same reason, on the stop's behalf, with
+        their subtrees; the ``emergency_stop`` action waits for them too). It
+        must not await; an error in it is logged and the stop goes on. Until
+        `remove_emergency_stop_callback`; adding it twice adds it once.
+        """
+        if self._estop_callbacks is None:
+            self._estop_callbacks = {}
+        self._estop_callbacks[callback] = None
+
+    def remove_emergency_stop_callback(self, callback: StopCallback) -> None:
+        """Stop calling ``callback`` at emergency stops (nothing if it was not added)."""
+        if self._estop_callbacks is not None:
+            self._estop_callbacks.pop(callback, None)
+
     def clear_emergency_stop(self) -> None:
         """Release the latched emergency stop: motion is allowed again (nothing restarts).
 
@@ -137,6 +169,16 @@ class EmergencyStop:
         log.info("emergency stop cleared (it was: %s)", self._estop_reason)
         self._estop_reason = None
         self.state.update({STOPPED_KEY: False, REASON_KEY: None})
+
+    def _to_preempt(self, reason: str, log: ScopedLogger) -> list[ActionHandle[Any]]:
+        """Every action holding or awaiting a resource, then those the callbacks hand over."""
+        preempted = dict.fromkeys(h for h in self._executive.running() if h.held or h.awaiting)
+        for callback in tuple(self._estop_callbacks or ()):
+            try:
+                preempted.update(dict.fromkeys(callback(reason)))
+            except Exception:
+                log.exception("an emergency stop callback failed (%s): %r", reason, callback)
+        return [h for h in preempted if not h.done()]
 
     def _refuse_motion(self, what: str) -> None:
         """Raise `EmergencyStopError` for ``what`` if the emergency stop is latched."""

@@ -3,7 +3,9 @@
 `retry` with an `exponential` `Backoff`, a `timeout`, a `HealthMonitor` of
 heartbeats and staleness, and a `StateMachine` whose states are actions and
 whose transitions are events (`When`) or outcomes. The emergency stop is the
-robot's own (``robot.emergency_stop(reason)``, ``robot.clear_emergency_stop()``).
+robot's own (``robot.emergency_stop(reason)``, ``robot.clear_emergency_stop()``);
+it ends every supervised plan: it cancels each running `retry`, and each
+`StateMachine`'s current state, whose machine takes its failure path.
 
 Layer: above ``robot`` (beside ``motion``); uses ``actions``, ``events``,
 ``state`` and ``robot``.

@@ -5,9 +5,11 @@ state's action as its child and waits for whichever comes first: a `When`
 event of that state (a one-shot monitor, as ``robot.on`` makes) or the
 action's end, whose `Outcome` picks the next state. An event cancels the
 state's action (with a reason naming the transition) and waits for its
-cleanup before the next state starts. Everything that can be wrong with the
-machine's shape is refused when it is built (`StateMachineError`); the state
-keys its events watch are checked when it starts.
+cleanup before the next state starts. An emergency stop cancels the state's
+action too (the machine hands it over, a `StopWatch`), and the machine takes
+its failure path. Everything that can be wrong with the machine's shape is
+refused when it is built (`StateMachineError`); the state keys its events
+watch are checked when it starts.
 """
 
 from __future__ import annotations
@@ -18,9 +20,10 @@ import logging
 from collections.abc import Callable, Iterable, Mapping
 from typing import TYPE_CHECKING, Any, NamedTuple, Unpack, cast
 
-from .._exceptions import StateMachineError
+from .._exceptions import EmergencyStopError, StateMachineError
 from ..actions import Action, ActionHandle, BoundAction, Outcome, action
 from ..events._conditions import check_poll, parse
+from ._stop import StopWatch
 
 if TYPE_CHECKING:
     from ..events import Conditions
@@ -109,7 +112,14 @@ class StateMachine(Action[Any, [], str]):
       its cleanup awaited, then the target starts;
     - when its action ends, on the transition for that `Outcome` (its own,
       else ``"*"``'s). With none, the machine ends: returning the state's
-      name if the action succeeded, else raising what awaiting it raises.
+      name if the action succeeded, else raising what awaiting it raises;
+    - on an emergency stop (``robot.emergency_stop``): the stop cancels the
+      state's action (reason ``"emergency stop: <reason>"``), and once its
+      cleanup is over the machine takes the state's FAILED transition (its
+      own, else ``"*"``'s), whatever the action's outcome: a CANCELLED
+      transition is for other cancellations. With none, the machine fails
+      with `EmergencyStopError`. The machine itself is not cancelled, and
+      the states it enters while the stop is latched run (the recovery).
 
     A state whose action is None is final: entering it ends the machine.
     The current state is written to the state key ``<name>_state`` and the
@@ -210,41 +220,66 @@ class StateMachine(Action[Any, [], str]):
     async def _step(self, robot: Robot, state: str, spec: StateAction) -> tuple[str | None, str]:
         """Run one state; return the next state (None: the machine ends) and why."""
         handle = _start(spec, robot, state)
-        decided: asyncio.Future[Transition | None] = asyncio.get_running_loop().create_future()
+        with StopWatch(robot, handle) as stop:  # a stop cancels the state's action
+            event = await self._first_of(robot, state, handle)
+            if event is not None:
+                handle.cancel(f"{self.name}: {state} -> {event[0]} on {event[1]}")
+                await handle.wait_done()
+        if stop.reason is not None:
+            return self._failure_path(state, handle, stop.reason)
+        return event if event is not None else self._after(state, handle)
 
-        def decide(choice: Transition | None) -> None:
+    async def _first_of(
+        self, robot: Robot, state: str, handle: ActionHandle[Any]
+    ) -> tuple[str, str] | None:
+        """Wait for the state's action to end (None) or an event: ``(target, the event)``."""
+        decided: asyncio.Future[tuple[str, str] | None] = asyncio.get_running_loop().create_future()
+
+        def decide(choice: tuple[str, str] | None) -> None:
             if not decided.done():
                 decided.set_result(choice)
 
         handle.add_done_callback(lambda _: decide(None))
         monitors = [
-            robot.on(when.var, poll=when.poll, **when.condition).do(decide, t)
-            for when, t in self._events(state)
+            robot.on(when.var, poll=when.poll, **when.condition).do(
+                decide, (target, when.describe())
+            )
+            for when, target in self._events(state)
         ]
         try:
-            choice = await decided
+            return await decided
         finally:
             for monitor in monitors:
                 monitor.stop_monitoring()
-        if choice is not None:
-            assert isinstance(choice.trigger, When)
-            cause = choice.trigger.describe()
-            handle.cancel(f"{self.name}: {state} -> {choice.target} on {cause}")
-            await handle.wait_done()
-            return choice.target, cause
+
+    def _after(self, state: str, handle: ActionHandle[Any]) -> tuple[str | None, str]:
+        """The next state (None: the machine ends) once the state's action is done, and why."""
         outcome = handle.outcome
         error = handle.exception()  # retrieved: a transition handles it, or we raise it
-        target = self._outcomes.get((state, outcome), self._outcomes.get((ANY, outcome)))
+        target = self._target(state, outcome)
         if target is None:
             if error is not None:  # no transition for a failure: it is the machine's
                 raise error
             return None, ""
         return target, _cause(handle, error)
 
-    def _events(self, state: str) -> list[tuple[When, Transition]]:
-        """The event transitions that leave ``state``, each with its `When`."""
+    def _failure_path(self, state: str, handle: ActionHandle[Any], reason: str) -> tuple[str, str]:
+        """After an emergency stop: the state's FAILED transition, or `EmergencyStopError`."""
+        error = handle.exception()  # retrieved: the stop ended it, whatever its outcome
+        target = self._target(state, Outcome.FAILED)
+        if target is None:
+            what = f"StateMachine {self.name!r} in state {state!r}"
+            raise EmergencyStopError(what, reason) from error
+        return target, f"emergency stop: {reason}"
+
+    def _target(self, state: str, outcome: Outcome) -> str | None:
+        """The state that ``state`` leaves for on ``outcome``: its own transition, else ``*``'s."""
+        return self._outcomes.get((state, outcome), self._outcomes.get((ANY, outcome)))
+
+    def _events(self, state: str) -> list[tuple[When, str]]:
+        """The event transitions that leave ``state``: each `When` and its target."""
         return [
-            (t.trigger, t)
+            (t.trigger, t.target)
             for t in self.transitions
             if isinstance(t.trigger, When)
             and (t.source == state or (t.source == ANY and t.target != state))

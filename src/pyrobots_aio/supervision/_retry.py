@@ -3,10 +3,14 @@
 Each attempt is a child action (so each shows in recordings and the
 timeline, with its own outcome); the retrying action waits the backoff delay
 between attempts. Cancellation is never retried: not the retrying action's
-own (it simply ends), nor an attempt's (preempted, emergency-stopped: awaiting
-it raises `ActionInterrupted`, which is re-raised at once). The one exception
-is an attempt cancelled by its own `timeout`, which counts as a
-``TimeoutError``.
+own (it simply ends), nor an attempt's (preempted: awaiting it raises
+`ActionInterrupted`, which is re-raised at once). The one exception is an
+attempt cancelled by its own `timeout`, which counts as a ``TimeoutError``.
+
+Nor is the emergency stop: the retrying action hands itself to each stop
+called while it runs (a `StopWatch`), which cancels it with its attempt, in
+its backoff too; an attempt's `EmergencyStopError` is never retried, and while
+the stop is latched a failed attempt is the last.
 """
 
 from __future__ import annotations
@@ -18,9 +22,10 @@ import random
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .._exceptions import ActionInterrupted
-from ..actions import Action
+from .._exceptions import ActionInterrupted, EmergencyStopError
+from ..actions import Action, current_action
 from ..actions._decorator import executive_of
+from ._stop import StopWatch
 from ._timeout import timed_out
 from ._wrap import ActionDecorator
 
@@ -116,9 +121,17 @@ class retry(ActionDecorator):  # lower case: a decorator, as DESIGN names it
     ``pyrobots_aio.supervision``); the last attempt's error is the action's.
     Cancellation is never retried: if the retrying action is cancelled, its
     attempt is too and it ends CANCELLED; an attempt cancelled from elsewhere
-    (preempted, stopped) ends the retrying action at once with its
-    `ActionInterrupted`. An attempt cancelled by its own `timeout` counts as
-    a ``TimeoutError``, retried if ``on`` names it (or a base class of it).
+    (preempted) ends the retrying action at once with its `ActionInterrupted`.
+    An attempt cancelled by its own `timeout` counts as a ``TimeoutError``,
+    retried if ``on`` names it (or a base class of it).
+
+    Nor is the emergency stop, whatever ``on`` says: ``robot.emergency_stop``
+    cancels the retrying action (reason ``"emergency stop: <reason>"``, by
+    the ``emergency_stop`` action), attempt and backoff alike, so it ends
+    CANCELLED at once and awaiting it raises `ActionInterrupted`, as for every
+    action the stop ends. An attempt's `EmergencyStopError` is never retried,
+    and while the stop is latched a failed attempt is the last (its error is
+    the action's).
 
     Args:
         attempts: How many times to run it, at most (1: no retry).
@@ -162,26 +175,29 @@ class retry(ActionDecorator):  # lower case: a decorator, as DESIGN names it
 
     def apply(self, act: Action[Any, Any, Any]) -> Action[Any, Any, Any]:
         """The retrying action around ``act`` (same name, parameters and result)."""
-        attempts, backoff, retries = self.attempts, self.backoff, self._retries
+        attempts, backoff, retries, name = self.attempts, self.backoff, self._retries, act.name
 
         async def retrying(robot: Any, /, *args: Any, **kwargs: Any) -> Any:
-            for attempt, delay in enumerate(backoff.delays(attempts - 1), 1):
-                try:
-                    return await act(robot, *args, **kwargs)
-                except Exception as error:
-                    if not retries(error):
-                        raise
-                    _log_retry(robot, act.name, f"{attempt} of {attempts}", error, delay)
-                await asyncio.sleep(delay)
-            return await act(robot, *args, **kwargs)  # the last attempt: its error is ours
+            with StopWatch(robot, current_action.get()):  # a stop cancels us, backoff included
+                for attempt, delay in enumerate(backoff.delays(attempts - 1), 1):
+                    try:
+                        return await act(robot, *args, **kwargs)
+                    except Exception as error:
+                        tried = f"{attempt} of {attempts}"
+                        if not retries(error) or not _log_retry(robot, name, tried, error, delay):
+                            raise
+                    await asyncio.sleep(delay)
+                return await act(robot, *args, **kwargs)  # the last attempt: its error is ours
 
-        retrying.__name__ = retrying.__qualname__ = act.name
+        retrying.__name__ = retrying.__qualname__ = name
         retrying.__doc__ = act.fn.__doc__
         retrying.__signature__ = inspect.signature(act.fn)  # type: ignore[attr-defined]
         return Action(retrying)
 
     def _retries(self, error: Exception) -> bool:
-        """Whether an attempt that raised ``error`` is run again."""
+        """Whether an attempt that raised ``error`` is run again (but for a latched stop)."""
+        if isinstance(error, EmergencyStopError):
+            return False
         if timed_out(error):
             return issubclass(TimeoutError, self.on)
         return not isinstance(error, ActionInterrupted) and isinstance(error, self.on)
@@ -211,6 +227,15 @@ def _exception_types(on: object) -> tuple[type[Exception], ...]:
     return types
 
 
-def _log_retry(robot: object, name: str, attempt: str, error: Exception, delay: float) -> None:
+def _log_retry(robot: Any, name: str, attempt: str, error: Exception, delay: float) -> bool:
+    """Log a failed attempt that ``on`` retries; return False if the latched stop forbids it."""
     log = executive_of(robot, name).log_scope.logger("pyrobots_aio.supervision")
-    log.info("%s: attempt %s failed (%r); retrying in %.3g s", name, attempt, error, delay)
+    stopped = robot.emergency_stop_reason
+    if stopped is None:
+        log.info("%s: attempt %s failed (%r); retrying in %.3g s", name, attempt, error, delay)
+        return True
+    log.info(
+        "%s: attempt %s failed (%r); not retried: the emergency stop is latched (%r)",
+        name, attempt, error, stopped,
+    )  # fmt: skip
+    return False

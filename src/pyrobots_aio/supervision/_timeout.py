@@ -69,7 +69,10 @@ class timeout(ActionDecorator):  # lower case: a decorator, as DESIGN names it
     it raises `ActionInterrupted`. It keeps its name, parameters and result
     type. Put it above ``@action``, or call it on an action: ``await
     timeout(2)(robot.lift)()``. Inside `retry`, an attempt that times out
-    counts as a ``TimeoutError`` for ``on=``.
+    counts as a ``TimeoutError`` for ``on=``. An action that another
+    cancellation reached first (an emergency stop, a preemption) keeps its
+    reason, even if its cleanup outlasts the deadline: it never reads as
+    timed out.
 
     Raises:
         ValueError: ``seconds`` is not a positive number.
