@@ -91,6 +91,63 @@ async def test_writing_state_from_a_worker_thread_says_how() -> None:
 
 
 @pytest.mark.asyncio
+async def test_cancel_pause_and_resume_from_a_worker_thread_say_how() -> None:
+    async with Robot() as robot:
+        handle = nap(robot, 3600)
+        await asyncio.sleep(0)
+        cancel = await _in_thread(lambda: handle.cancel("from the worker"))
+        pause = await _in_thread(lambda: handle.pause("from the worker"))
+        resume = await _in_thread(handle.resume)
+        loop_thread = threading.current_thread().name
+        assert isinstance(cancel, EventLoopError)
+        assert str(cancel) == (
+            f"cannot cancel action nap#1 from thread 'worker': the robot runs on the event loop "
+            f"of thread {loop_thread!r}; from another thread, use {THREADSAFE}"
+        )
+        assert isinstance(pause, EventLoopError)
+        assert str(pause).startswith("cannot pause action nap#1 from thread 'worker'")
+        assert isinstance(resume, EventLoopError)
+        assert str(resume).startswith("cannot resume action nap#1 from thread 'worker'")
+        await asyncio.sleep(0)  # nothing was left to land when the loop wakes
+        assert not handle.cancel_requested
+        assert not handle.paused
+        await _in_thread(lambda: robot.call_soon_threadsafe(handle.cancel, "from the worker"))
+        assert await handle.wait_done() is Outcome.CANCELLED
+        assert handle.cancel_reason == "from the worker"
+        assert await _in_thread(handle.cancel) is None  # done: nothing to do, from anywhere
+        assert handle.cancel() is False
+
+
+@pytest.mark.asyncio
+async def test_pausing_all_and_the_emergency_stop_from_a_worker_thread_say_how() -> None:
+    async with Robot() as robot:
+        handle = nap(robot, 3600)
+        await asyncio.sleep(0)
+        pause_all = await _in_thread(robot.pause_all)
+        resume_all = await _in_thread(robot.resume_all)
+        stop = await _in_thread(robot.emergency_stop)
+        assert str(pause_all).startswith("cannot call robot.pause_all from thread 'worker'")
+        assert str(resume_all).startswith("cannot call robot.resume_all from thread 'worker'")
+        assert str(stop).startswith("cannot emergency stop from thread 'worker'")
+        assert not handle.paused
+        assert not robot.emergency_stopped
+        await robot.emergency_stop("operator")
+        clear = await _in_thread(robot.clear_emergency_stop)
+        assert isinstance(clear, EventLoopError)
+        assert str(clear) == (
+            f"cannot clear the emergency stop from thread 'worker': the robot runs on the event "
+            f"loop of thread {threading.current_thread().name!r}; from another thread, use "
+            f"{THREADSAFE}"
+        )
+        assert robot.emergency_stopped  # still latched, its state keys with it
+        assert robot.state.emergency_stop is True
+        handle.cancel()
+    assert await _in_thread(robot.clear_emergency_stop) is None  # stopped: from anywhere
+    assert not robot.emergency_stopped
+    assert robot.state.emergency_stop is False
+
+
+@pytest.mark.asyncio
 async def test_the_threadsafe_ways_in_work_from_a_worker_thread() -> None:
     async with Robot() as robot:
         robot.state.mode = "idle"

@@ -120,6 +120,7 @@ class Executive:
         """
         self._closing = True
         roots = list(self._roots)
+        by = current_action.get()
         for handle in roots:
             if handle._forgotten():
                 self.log.warning(
@@ -129,7 +130,7 @@ class Executive:
                     handle.name,
                     handle.id,
                 )
-            handle.cancel(reason)
+            self.cancel_tree(handle, reason, by)
         try:
             await wait_shielded(self.all_done(roots))
         finally:
@@ -278,8 +279,9 @@ class Executive:
                 spared.add(node)
                 node = node.parent
         targets = self._outermost_except(spared)
+        by = current_action.get()
         for handle in targets:
-            handle.cancel(reason)
+            self.cancel_tree(handle, reason, by)
         await self.all_done(targets)
 
     def _outermost_except(self, spared: set[ActionHandle[Any]]) -> list[ActionHandle[Any]]:
@@ -304,8 +306,9 @@ class Executive:
         while handle._children:
             children = list(handle._children)
             if not handle._cancel_requested:
+                reason, by = f"its parent {handle.name}#{handle.id} finished", current_action.get()
                 for child in children:
-                    child.cancel(f"its parent {handle.name}#{handle.id} finished")
+                    self.cancel_tree(child, reason, by)
             await self.all_done(children)
 
     def all_done(self, handles: Iterable[ActionHandle[Any]]) -> asyncio.Future[None]:

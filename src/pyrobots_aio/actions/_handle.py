@@ -194,7 +194,8 @@ class ActionHandle(Generic[T]):
             try:
                 yield from fut
             except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
-                self.cancel("the task awaiting it was cancelled")
+                reason = "the task awaiting it was cancelled"
+                self._executive.cancel_tree(self, reason, current_action.get())
                 raise
             finally:
                 if not fut.done() and self._waiters is not None:
@@ -236,15 +237,24 @@ class ActionHandle(Generic[T]):
 
     def _waiter(self, verb: str) -> asyncio.Future[None]:
         """A future the action's end completes; the caller must be on the robot's loop."""
-        loop = self._loop
-        if not running_here(loop, self._executive.thread_ident):
-            raise wrong_loop(f"{verb} action {self.name}#{self.id}", loop, self._executive.thread)
-        fut = loop.create_future()
+        self._check_here(verb)
+        fut = self._loop.create_future()
         if self._waiters is None:
             self._waiters = [fut]
         else:
             self._waiters.append(fut)
         return fut
+
+    def _check_here(self, verb: str) -> None:
+        """Raise `EventLoopError` unless the caller runs on the robot's loop.
+
+        From another thread, the call would change the action behind the loop's
+        back and take effect only when the loop next wakes (seconds later on an
+        idle loop); the error names the thread-safe way in.
+        """
+        if not running_here(self._loop, self._executive.thread_ident):
+            what = f"{verb} action {self.name}#{self.id}"
+            raise wrong_loop(what, self._loop, self._executive.thread)
 
     def _forget_waiter(self, fut: asyncio.Future[None]) -> None:
         if not fut.done() and self._waiters is not None:
@@ -340,9 +350,14 @@ class ActionHandle(Generic[T]):
 
         The action sees `ActionCancelled` at its next ``await``; its cleanup may
         await. Returns False if the action was already done.
+
+        Raises:
+            EventLoopError: Called from another thread (use
+                ``robot.call_soon_threadsafe(handle.cancel, reason)``).
         """
         if self._phase == DONE:
             return False
+        self._check_here("cancel")
         self._executive.cancel_tree(self, reason, current_action.get())
         return True
 
@@ -355,6 +370,10 @@ class ActionHandle(Generic[T]):
         cancellation still reaches it at once (and its cleanup runs unfrozen).
         Pause hooks (``@action(on_pause=...)``) run now. Returns False if the
         action is done.
+
+        Raises:
+            EventLoopError: Called from another thread (use
+                ``robot.call_soon_threadsafe(handle.pause, reason)``).
 
         Example:
             >>> import asyncio
@@ -380,6 +399,7 @@ class ActionHandle(Generic[T]):
         """
         if self._phase == DONE:
             return False
+        self._check_here("pause")
         self._executive.pause_tree(self, reason, current_action.get())
         return True
 
@@ -387,8 +407,15 @@ class ActionHandle(Generic[T]):
         """Thaw what `pause` froze (descendants paused on their own stay paused).
 
         Returns False if this action was not paused (or is done).
+
+        Raises:
+            EventLoopError: Called from another thread (use
+                ``robot.call_soon_threadsafe(handle.resume)``).
         """
-        if self._phase == DONE or not self._paused:
+        if self._phase == DONE:
+            return False
+        self._check_here("resume")
+        if not self._paused:
             return False
         self._executive.resume_tree(self)
         return True

@@ -162,7 +162,13 @@ class EmergencyStop:
         """Release the latched emergency stop: motion is allowed again (nothing restarts).
 
         Clearing a stop that is not latched does nothing.
+
+        Raises:
+            EventLoopError: Called from another thread while the robot runs (use
+                ``robot.call_soon_threadsafe(robot.clear_emergency_stop)``).
         """
+        if self._executive.is_running:  # (the latch outlives a run: clearing it between is fine)
+            self._executive.check_loop("clear the emergency stop")
         if self._estop_reason is None:
             return
         log = self._executive.log_scope.logger("pyrobots_aio.robot")

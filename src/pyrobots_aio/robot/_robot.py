@@ -406,11 +406,25 @@ class Robot(StateMethods, EmergencyStop):
             await sleep_until(deadline)
 
     def pause_all(self, reason: str | None = None) -> None:
-        """Pause every running action (see `ActionHandle.pause`); `resume_all` thaws them."""
+        """Pause every running action (see `ActionHandle.pause`); `resume_all` thaws them.
+
+        Raises:
+            RobotNotRunningError: The robot is not running.
+            EventLoopError: Called from another thread (use
+                ``robot.call_soon_threadsafe(robot.pause_all, reason)``).
+        """
+        self._executive.check_loop("call robot.pause_all")
         self._executive.pause_all(reason)
 
     def resume_all(self) -> None:
-        """Resume every paused action."""
+        """Resume every paused action.
+
+        Raises:
+            RobotNotRunningError: The robot is not running.
+            EventLoopError: Called from another thread (use
+                ``robot.call_soon_threadsafe(robot.resume_all)``).
+        """
+        self._executive.check_loop("call robot.resume_all")
         self._executive.resume_all()
 
     def time(self) -> float:
