@@ -13,11 +13,13 @@ PACKAGE = Path(pyrobots_aio.__file__).parent
 LAYERS = {
     "_exceptions": 0,
     "_core": 1,
+    "loops": 1,
     "resources": 2,
     "state": 2,
     "poses": 2,
     "actions": 3,
     "events": 3,
+    "telemetry": 3,
     "robot": 4,
     "motion": 4.5,
     "supervision": 4.5,

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from pyrobots_aio._core._clock import run
 from pyrobots_aio._exceptions import UnknownStateKeyError
+from pyrobots_aio.loops._virtual import run
 from pyrobots_aio.state import StateSample, StateStore, Subscription
 
 if TYPE_CHECKING:

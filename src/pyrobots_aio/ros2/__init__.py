@@ -23,6 +23,8 @@ actions and the random walk run on it as on the simulator.
 Layer: beside ``sim``, on the public API only.
 """
 
+from ..loops import scaled_loop as scaled_loop
+from ..loops._scaled import run as run
 from ._diagnostics import staleness as staleness
 from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
@@ -32,8 +34,6 @@ from ._robot import CLIFF_SENSORS as CLIFF_SENSORS
 from ._robot import DOCK_IN_ODOM as DOCK_IN_ODOM
 from ._robot import IR_SENSORS as IR_SENSORS
 from ._robot import Ros2Robot as Ros2Robot
-from ._run import run as run
-from ._run import scaled_loop as scaled_loop
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState

@@ -4,9 +4,9 @@ Needs the ``sim`` extra (``pip install -e ".[sim]"`` in a checkout). ``run(main)
 runs ``main`` on a virtual-time loop whose clock *is* simulation time.
 """
 
-from .._core._clock import is_virtual as is_virtual
-from .._core._clock import new_virtual_loop as new_virtual_loop
-from .._core._clock import run as run
+from ..loops import is_virtual as is_virtual
+from ..loops import new_virtual_loop as new_virtual_loop
+from ..loops._virtual import run as run
 from ._backend import SimBackend as SimBackend
 from ._frames import WorldFrames as WorldFrames
 from ._models import model_path as model_path

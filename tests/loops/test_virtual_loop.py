@@ -10,7 +10,7 @@ import anyio
 import pytest
 
 from pyrobots_aio import EventLoopError
-from pyrobots_aio._core._clock import (
+from pyrobots_aio.loops._virtual import (
     VirtualTimeLoop,
     VirtualTimePolicy,
     is_virtual,
@@ -430,7 +430,7 @@ def test_pytest_asyncio_runs_marked_tests_on_the_virtual_loop(pytester: pytest.P
         textwrap.dedent(
             """
             import asyncio
-            from pyrobots_aio._core._clock import new_virtual_loop
+            from pyrobots_aio.loops import new_virtual_loop
 
             def pytest_configure(config):
                 config.addinivalue_line("markers", "virtual_time: run on the virtual loop")
@@ -448,7 +448,7 @@ def test_pytest_asyncio_runs_marked_tests_on_the_virtual_loop(pytester: pytest.P
             import asyncio
             import pytest
             import pytest_asyncio
-            from pyrobots_aio._core._clock import is_virtual
+            from pyrobots_aio.loops import is_virtual
 
             pytestmark = pytest.mark.virtual_time
 
@@ -475,7 +475,7 @@ def test_pytest_asyncio_runs_marked_tests_on_the_virtual_loop(pytester: pytest.P
             """
             import asyncio
             import pytest
-            from pyrobots_aio._core._clock import is_virtual
+            from pyrobots_aio.loops import is_virtual
 
             @pytest.mark.asyncio
             async def test_unmarked_tests_keep_the_real_loop():

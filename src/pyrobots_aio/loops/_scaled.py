@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import math
+import selectors
+import time
 from typing import TYPE_CHECKING, TypeVar, TypeVarTuple
 
 if TYPE_CHECKING:
@@ -11,6 +13,36 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 Ts = TypeVarTuple("Ts")
+
+_SelectResult = list[tuple[selectors.SelectorKey, int]]
+
+
+class _ScaledSelector(selectors.DefaultSelector):
+    """The platform's selector, where a wait of ``t`` loop seconds lasts ``t / rate`` real ones."""
+
+    def __init__(self, rate: float) -> None:
+        super().__init__()
+        self._rate = rate
+
+    def select(self, timeout: float | None = None) -> _SelectResult:
+        return super().select(None if timeout is None else timeout / self._rate)
+
+
+class ScaledTimeLoop(asyncio.SelectorEventLoop):
+    """An event loop whose clock runs ``rate`` times faster than the wall clock, from 0.
+
+    Timers, sleeps and timeouts all follow it, so a real-time `SimRobot` on
+    this loop simulates ``rate`` seconds per second.
+    """
+
+    def __init__(self, rate: float) -> None:
+        self._rate = rate
+        self._origin = time.monotonic()
+        super().__init__(_ScaledSelector(rate))
+
+    def time(self) -> float:
+        """Simulated seconds since the loop was made."""
+        return (time.monotonic() - self._origin) * self._rate
 
 
 def scaled_loop(rate: float) -> asyncio.AbstractEventLoop:
@@ -27,8 +59,6 @@ def scaled_loop(rate: float) -> asyncio.AbstractEventLoop:
         raise ValueError(msg)
     if rate == 1:
         return asyncio.new_event_loop()
-    from ..cli._sim_node import ScaledTimeLoop
-
     return ScaledTimeLoop(float(rate))
 
 

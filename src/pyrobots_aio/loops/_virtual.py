@@ -44,8 +44,8 @@ import sys
 import warnings
 from typing import TYPE_CHECKING, Any, TypeVar, TypeVarTuple
 
+from .._core._numbers import finite
 from .._exceptions import EventLoopError
-from ._numbers import finite
 
 if TYPE_CHECKING:
     from collections import deque
