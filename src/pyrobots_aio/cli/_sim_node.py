@@ -45,7 +45,7 @@ import math
 import signal
 from typing import TYPE_CHECKING, Any, TextIO
 
-from pyrobots_aio.loops import ScaledTimeLoop
+from pyrobots_aio.loops import run_scaled
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -237,8 +237,5 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
 
 def run_sim_node(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run ``sim-node`` until SIGINT or SIGTERM; return the exit code."""
-    rate = options.rate
-    factory = (lambda: ScaledTimeLoop(rate)) if rate != 1.0 else asyncio.new_event_loop
-    with asyncio.Runner(loop_factory=factory) as runner:
-        runner.run(_serve(options, out))
+    run_scaled(_serve, options, out, rate=options.rate)
     return 0

@@ -1,4 +1,8 @@
-"""``run(main, *args, rate=R)``: a program's loop at the pace of a ``sim-node --rate R``."""
+"""Scaled time: a loop whose clock runs ``rate`` times faster than the wall clock.
+
+``run_scaled(main, *args, rate=R)`` runs a program at the pace of a
+``pyrobots-aio sim-node --rate R``.
+"""
 
 from __future__ import annotations
 
@@ -62,11 +66,13 @@ def scaled_loop(rate: float) -> asyncio.AbstractEventLoop:
     return ScaledTimeLoop(float(rate))
 
 
-def run(main: Callable[[*Ts], Coroutine[object, object, T]], *args: *Ts, rate: float = 1.0) -> T:
+def run_scaled(
+    main: Callable[[*Ts], Coroutine[object, object, T]], *args: *Ts, rate: float = 1.0
+) -> T:
     """Run ``main(*args)`` on a loop `rate` times faster than real time; return its result.
 
     Beside ``pyrobots-aio sim-node --rate R`` (which simulates R seconds a
-    second and publishes ``/clock``), ``run(main, rate=R)`` makes the
+    second and publishes ``/clock``), ``run_scaled(main, rate=R)`` makes the
     program's seconds — ``robot.time()``, ``robot.sleep``, timeouts, a
     `Ros2Robot`'s ``odom_timeout`` — simulated seconds too.
 
@@ -77,7 +83,7 @@ def run(main: Callable[[*Ts], Coroutine[object, object, T]], *args: *Ts, rate: f
         ...     start = loop.time()
         ...     await asyncio.sleep(2.0)  # 0.5 s of the wall clock
         ...     return round(loop.time() - start)
-        >>> run(main, rate=4)
+        >>> run_scaled(main, rate=4)
         2
     """
     loop = scaled_loop(rate)

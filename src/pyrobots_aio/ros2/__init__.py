@@ -20,11 +20,11 @@ running inside ``async with robot``:
 (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock ``Bool``): the motion
 actions and the random walk run on it as on the simulator.
 
-Layer: beside ``sim``, on the public API only.
+Layer: above ``sim`` (which it does not import) and below ``cli``, on the public API only.
+A program beside a ``sim-node --rate R`` runs at its pace with
+`pyrobots_aio.loops.run_scaled`.
 """
 
-from ..loops import scaled_loop as scaled_loop
-from ..loops._scaled import run as run
 from ._diagnostics import staleness as staleness
 from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
@@ -50,7 +50,5 @@ __all__ = [
     "attach_ros2",
     "qos_profile",
     "ros_name",
-    "run",
-    "scaled_loop",
     "staleness",
 ]

@@ -1,4 +1,20 @@
-"""Telemetry: the Foxglove channels of a run, state sampling, and the live view."""
+"""Telemetry: the Foxglove channels of a run, state sampling, and the live view.
+
+- `FoxgloveChannels` turns the executive's events, state samples, the pose and
+  log records into the messages of the Foxglove channels (`FIXED_CHANNELS`,
+  schemas in `SCHEMAS`, strict JSON);
+- `StateSampler` passes on what each write of a robot's state brings;
+- `LiveView` serves those channels over Foxglove's WebSocket protocol while a
+  robot runs (``Robot(serve=PORT)``).
+
+The recorders (`pyrobots_aio.recording`) and the live view share them, so a
+recording and the live view carry the same messages.
+
+Layer: below the robot, beside ``actions`` and ``events``. The robot owns its
+live view, so it imports telemetry; telemetry reads the robot only through
+`TelemetrySource` (its state, poses, clock and instruments), a protocol that
+`pyrobots_aio.Robot` meets, and never imports the robot.
+"""
 
 from ._channels import EVENT as EVENT
 from ._channels import FIXED_CHANNELS as FIXED_CHANNELS
