@@ -29,7 +29,8 @@ import subprocess
 import sys
 
 from pyrobots_aio.cli import install_console_handler
-from pyrobots_aio.ros2 import Ros2Robot, run
+from pyrobots_aio.loops import run_scaled
+from pyrobots_aio.ros2 import Ros2Robot
 from pyrobots_aio.sim.random_walk import WalkReport, random_walk
 
 COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]  # pyrobots-aio sim-node
@@ -66,7 +67,7 @@ if __name__ == "__main__":
     install_console_handler()
     sim_node = None if options.external else start_sim_node(options.namespace, options.rate)
     try:
-        report = run(main, options.namespace, options.moves, options.seed, rate=options.rate)
+        report = run_scaled(main, options.namespace, options.moves, options.seed, rate=options.rate)
     finally:
         if sim_node is not None:
             sim_node.terminate()

@@ -12,6 +12,7 @@ PUBLIC = [
     "pyrobots_aio",
     "pyrobots_aio.actions",
     "pyrobots_aio.events",
+    "pyrobots_aio.loops",
     "pyrobots_aio.motion",
     "pyrobots_aio.poses",
     "pyrobots_aio.resources",
@@ -20,6 +21,7 @@ PUBLIC = [
     "pyrobots_aio.sim",
     "pyrobots_aio.state",
     "pyrobots_aio.supervision",
+    "pyrobots_aio.telemetry",
     "pyrobots_aio.testing",
 ]
 

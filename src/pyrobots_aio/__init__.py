@@ -2,13 +2,19 @@
 
 Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 
-1. ``_core``: clock, instrumentation (stdlib + anyio only)
-2. ``resources``, ``state``, ``poses``
-3. ``actions``, ``events``
-4. ``robot`` (the composition root)
-5. ``motion`` (`DriveBase`: the motion actions, over any base), ``supervision``
+0. ``_exceptions``
+1. ``_core``: instrumentation, logging, signals, waiting (stdlib + anyio only)
+2. ``loops``: the lockstep virtual-time and scaled-time loops, and their ``run``
+3. ``resources``, ``state``, ``poses``
+4. ``actions``, ``events``, ``telemetry`` (Foxglove channels, state sampling, the
+   live view: below the robot, which owns a live view; it reads the robot
+   through a protocol of its own, `telemetry.TelemetrySource`)
+5. ``robot`` (the composition root)
+6. ``motion`` (`DriveBase`: the motion actions, over any base), ``supervision``
    (retry, timeout, health monitor, state machine)
-6. ``recording``, ``sim``, ``ros2``, ``testing``, ``cli`` (public API only)
+7. ``recording``, ``sim``, ``testing`` (public API only)
+8. ``ros2`` (public API only)
+9. ``cli`` (public API only; its ``sim-node`` runs ``sim`` over ``ros2``)
 """
 
 from ._core._instrument import EventKind as EventKind

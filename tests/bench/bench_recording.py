@@ -24,9 +24,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pyrobots_aio import Robot, action
+from pyrobots_aio.loops import run_lockstep
 from pyrobots_aio.recording import JsonlRecorder, McapRecorder, load
 from pyrobots_aio.sim import SimRobot
-from pyrobots_aio.sim import run as lockstep
 from pyrobots_aio.sim.random_walk import random_walk
 
 if TYPE_CHECKING:
@@ -88,7 +88,7 @@ def _walks(tmp: Path) -> dict[str, float]:
     best = dict.fromkeys(makers, float("inf"))
     for _ in range(WALK_ROUNDS):
         for name, make in makers.items():
-            best[name] = min(best[name], lockstep(_walk, make()))
+            best[name] = min(best[name], run_lockstep(_walk, make()))
     recording = load(tmp / "walk.jsonl")
     return {
         "walk_recording_overhead_ratio": best["jsonl"] / best["bare"],

@@ -34,8 +34,8 @@ from typing import TYPE_CHECKING
 
 from pyrobots_aio import Robot, action
 from pyrobots_aio.actions import lock
+from pyrobots_aio.loops import run_lockstep
 from pyrobots_aio.resources import CompoundResource, Resource, ResourceManager
-from pyrobots_aio.sim import run as run_virtual
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -201,8 +201,8 @@ def run() -> dict[str, float]:
         "drain_us_per_waiter_10": asyncio.run(_drain(10, (WHEELS,))),
         "drain_compound_us_per_waiter_1000": asyncio.run(_drain(1000, (WHEELS, BOTH))),
     }
-    utilisation, strict = run_virtual(_contention, None)
-    _, aged = run_virtual(_contention, 2.0)
+    utilisation, strict = run_lockstep(_contention, None)
+    _, aged = run_lockstep(_contention, 2.0)
     figures["utilisation_pct_compound_contention"] = utilisation
     figures["max_wait_lowest_priority_s_strict"] = strict
     figures["max_wait_lowest_priority_s_aging"] = aged

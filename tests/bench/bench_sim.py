@@ -30,9 +30,9 @@ from pathlib import Path
 
 import mujoco
 
+from pyrobots_aio.loops import run_lockstep
 from pyrobots_aio.recording import JsonlRecorder
 from pyrobots_aio.sim import SimRobot, SimWorld
-from pyrobots_aio.sim import run as run_lockstep
 from pyrobots_aio.sim.random_walk import random_walk
 
 IDLE_SECONDS = 120.0

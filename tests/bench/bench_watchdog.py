@@ -40,9 +40,9 @@ from unittest import mock
 from pyrobots_aio import Robot, action
 from pyrobots_aio._core._blockwatch import BlockWatch
 from pyrobots_aio._core._timerfd import Timer
+from pyrobots_aio.loops import run_lockstep
 from pyrobots_aio.robot import _robot as robot_module
 from pyrobots_aio.sim import SimRobot
-from pyrobots_aio.sim import run as run_lockstep
 from pyrobots_aio.sim.random_walk import random_walk
 
 BLOCKS = 30

@@ -9,8 +9,8 @@ import time
 import pytest
 
 from pyrobots_aio import ActionHandle, EventLoopError, Outcome, Robot, action
-from pyrobots_aio._core._clock import VirtualTimeLoop
 from pyrobots_aio._core._loops import clock_of, current_loop, running_here
+from pyrobots_aio.loops import VirtualTimeLoop
 from pyrobots_aio.state import StateStore
 
 

@@ -8,7 +8,8 @@ import pytest
 
 import pyrobots_aio.sim
 from pyrobots_aio import EventLoopError, Outcome, Robot, action
-from pyrobots_aio.sim import SimRobot, is_virtual
+from pyrobots_aio.loops import is_virtual
+from pyrobots_aio.sim import SimRobot
 
 
 async def dry_run(distance: float) -> tuple[Outcome, float, bool]:

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from pyrobots_aio import Robot, action
-from pyrobots_aio._core._clock import VirtualTimeLoop
+from pyrobots_aio.loops import VirtualTimeLoop
 
 pytestmark = pytest.mark.virtual_time
 

@@ -26,8 +26,8 @@ from pyrobots_aio.recording import (
     render_timeline_html,
     summarize,
 )
-from pyrobots_aio.robot.channels import SCHEMAS
 from pyrobots_aio.sim import SimRobot
+from pyrobots_aio.telemetry import SCHEMAS
 
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable

@@ -59,7 +59,7 @@ def pytest_asyncio_loop_factories(
     rate = getattr(getattr(item, "module", None), "LOOP_RATE", None)
     if rate is None:
         return None
-    from pyrobots_aio.ros2 import scaled_loop
+    from pyrobots_aio.loops import scaled_loop
 
     return {f"x{rate}": lambda: scaled_loop(rate)}
 

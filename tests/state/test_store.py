@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from pyrobots_aio._core._clock import run
 from pyrobots_aio._exceptions import UnknownStateKeyError
+from pyrobots_aio.loops import run_lockstep
 from pyrobots_aio.state import StateSample, StateStore, Subscription
 
 if TYPE_CHECKING:
@@ -198,7 +198,7 @@ def test_timestamps_come_from_the_loop_clock() -> None:
         await asyncio.sleep(0.25)
         return first, store.sample("bumper"), store.timestamp("v"), store.timestamp("w")
 
-    first, second, v_stamp, w_stamp = run(main)
+    first, second, v_stamp, w_stamp = run_lockstep(main)
     assert first == StateSample(value=False, timestamp=0.0, version=1)
     assert second == StateSample(value=True, timestamp=1.5, version=2)
     assert (v_stamp, w_stamp) == (1.5, 1.5)
@@ -300,7 +300,7 @@ def test_every_write_is_seen_even_within_one_loop_iteration() -> None:
         await asyncio.sleep(0)
         return seen.calls
 
-    assert run(main) == [{"bumper": True}, {"bumper": False}]
+    assert run_lockstep(main) == [{"bumper": True}, {"bumper": False}]
 
 
 def test_batch_update_notifies_each_subscriber_once_with_its_keys() -> None:
@@ -579,7 +579,7 @@ def test_track_reads_in_async_code_is_isolated_between_tasks() -> None:
             tg.create_task(untracked_reader())
         return first.result(), second.result()
 
-    assert run(main) == ({"bumper", "ir_left"}, {"docked", "cliff_left", "w"})
+    assert run_lockstep(main) == ({"bumper", "ir_left"}, {"docked", "cliff_left", "w"})
 
 
 # -- filtered ---------------------------------------------------------------------------------

@@ -3,7 +3,8 @@ from __future__ import annotations
 import pytest
 
 from pyrobots_aio import EventKind, Robot, action, lock
-from pyrobots_aio.sim import WHEELS, SimRobot, is_virtual
+from pyrobots_aio.loops import is_virtual
+from pyrobots_aio.sim import WHEELS, SimRobot
 from pyrobots_aio.testing import EventLog
 
 

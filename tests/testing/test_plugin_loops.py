@@ -36,7 +36,7 @@ _LOOPS = """
     import asyncio
     import pytest
     from conftest import OwnLoop
-    from pyrobots_aio.sim import is_virtual
+    from pyrobots_aio.loops import is_virtual
 
     def loop_kind():
         loop = asyncio.get_running_loop()
@@ -118,7 +118,7 @@ def test_without_a_loop_factory_hook_the_tests_run_on_asyncio_s_loop(
         """
         import asyncio
         import pytest
-        from pyrobots_aio.sim import is_virtual
+        from pyrobots_aio.loops import is_virtual
 
         @pytest.mark.asyncio
         async def test_plain():
@@ -154,7 +154,7 @@ def test_the_function_scoped_fixtures_run_on_the_test_s_loop_whatever_its_scope(
         import asyncio
         import pytest
         from pyrobots_aio import action
-        from pyrobots_aio.sim import is_virtual
+        from pyrobots_aio.loops import is_virtual
 
         @action
         async def count(robot, n):
@@ -234,7 +234,7 @@ def test_module_and_session_robots_are_shared_by_the_tests_on_their_loop(
         """,
         test_two="""
         import pytest
-        from pyrobots_aio.sim import is_virtual
+        from pyrobots_aio.loops import is_virtual
 
         pytestmark = pytest.mark.asyncio(loop_scope="session")
 

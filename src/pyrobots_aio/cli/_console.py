@@ -28,6 +28,7 @@ import weakref
 from typing import TYPE_CHECKING, Protocol
 
 from pyrobots_aio.actions import current_action
+from pyrobots_aio.loops import is_virtual
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -96,12 +97,6 @@ def format_time(seconds: float | None) -> str:
     return " " * TIME_WIDTH if seconds is None else f"{seconds:{TIME_WIDTH}.3f}"
 
 
-def _is_virtual(loop: asyncio.AbstractEventLoop) -> bool:
-    from pyrobots_aio.sim import is_virtual  # on demand: plain programs never need the simulator
-
-    return is_virtual(loop)
-
-
 class ConsoleHandler(logging.Handler):
     """A `logging.Handler` for people at a terminal.
 
@@ -159,7 +154,7 @@ class ConsoleHandler(logging.Handler):
             return now - self.start
         if self._loop is None or self._loop() is not loop:  # a loop seen for the first time
             self._loop = weakref.ref(loop)
-            self._origin = 0.0 if _is_virtual(loop) else now
+            self._origin = 0.0 if is_virtual(loop) else now
         return now - self._origin
 
     def format(self, record: logging.LogRecord) -> str:

@@ -42,18 +42,16 @@ from __future__ import annotations
 import argparse
 import asyncio
 import math
-import selectors
 import signal
-import time
 from typing import TYPE_CHECKING, Any, TextIO
+
+from pyrobots_aio.loops import run_scaled
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
     from pyrobots_aio.ros2 import Ros2Node
     from pyrobots_aio.sim import SimRobot
-
-_SelectResult = list[tuple[selectors.SelectorKey, int]]
 
 
 def positive(text: str) -> float:
@@ -105,34 +103,6 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     node.add_argument("--seed", type=int, default=0, help="seeds the IR noise (default: 0)")
     node.set_defaults(command=run_sim_node)
-
-
-class _ScaledSelector(selectors.DefaultSelector):
-    """The platform's selector, where a wait of ``t`` loop seconds lasts ``t / rate`` real ones."""
-
-    def __init__(self, rate: float) -> None:
-        super().__init__()
-        self._rate = rate
-
-    def select(self, timeout: float | None = None) -> _SelectResult:
-        return super().select(None if timeout is None else timeout / self._rate)
-
-
-class ScaledTimeLoop(asyncio.SelectorEventLoop):
-    """An event loop whose clock runs ``rate`` times faster than the wall clock, from 0.
-
-    Timers, sleeps and timeouts all follow it, so a real-time `SimRobot` on
-    this loop simulates ``rate`` seconds per second.
-    """
-
-    def __init__(self, rate: float) -> None:
-        self._rate = rate
-        self._origin = time.monotonic()
-        super().__init__(_ScaledSelector(rate))
-
-    def time(self) -> float:
-        """Simulated seconds since the loop was made."""
-        return (time.monotonic() - self._origin) * self._rate
 
 
 class SimNode:
@@ -267,8 +237,5 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
 
 def run_sim_node(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run ``sim-node`` until SIGINT or SIGTERM; return the exit code."""
-    rate = options.rate
-    factory = (lambda: ScaledTimeLoop(rate)) if rate != 1.0 else asyncio.new_event_loop
-    with asyncio.Runner(loop_factory=factory) as runner:
-        runner.run(_serve(options, out))
+    run_scaled(_serve, options, out, rate=options.rate)
     return 0

@@ -36,8 +36,8 @@ import os
 from typing import IO, TYPE_CHECKING, Any
 
 from pyrobots_aio import EventKind, RecordingError
-from pyrobots_aio.robot.channels import finite as _finite
-from pyrobots_aio.robot.channels import jsonable as _jsonable
+from pyrobots_aio.telemetry import finite as _finite
+from pyrobots_aio.telemetry import jsonable as _jsonable
 
 from ._recorder import Recorder
 
@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Mapping
 
     from pyrobots_aio import ExecEvent
-    from pyrobots_aio.robot.sampling import Pose2D
+    from pyrobots_aio.telemetry import Pose2D
 
 _log = logging.getLogger("pyrobots_aio.recording")
 

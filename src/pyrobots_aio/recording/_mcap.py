@@ -21,7 +21,7 @@ import os
 from typing import TYPE_CHECKING, Any
 
 from pyrobots_aio import RecordingError
-from pyrobots_aio.robot.channels import (
+from pyrobots_aio.telemetry import (
     FIXED_CHANNELS,
     SCHEMAS,
     FoxgloveChannels,
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from mcap.writer import Writer
 
     from pyrobots_aio import ExecEvent, Robot
-    from pyrobots_aio.robot.sampling import Pose2D
+    from pyrobots_aio.telemetry import Pose2D
 
 LOGGER = "pyrobots_aio"
 """The logger whose records go to ``/pyrobots/log`` with ``logs=True``."""

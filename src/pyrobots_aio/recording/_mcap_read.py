@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from pyrobots_aio import CorruptRecordingError, ExecEvent, RecordingError
-from pyrobots_aio.robot.channels import EVENT, POSE_IN_FRAME, SAMPLE
+from pyrobots_aio.telemetry import EVENT, POSE_IN_FRAME, SAMPLE
 
 from ._mcap import origin_ns
 from ._recording import (

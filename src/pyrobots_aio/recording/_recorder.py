@@ -17,7 +17,7 @@ import math
 from typing import TYPE_CHECKING, Any, Self
 
 from pyrobots_aio import ExecEvent, RecordingError
-from pyrobots_aio.robot.sampling import Pose2D, StateSampler
+from pyrobots_aio.telemetry import Pose2D, StateSampler
 
 from ._recording import FORMAT, VERSION, Recording, RecordingHeader, SeriesBuilder
 

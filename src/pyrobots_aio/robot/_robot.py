@@ -28,8 +28,8 @@ from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager
 from ..state import StateStore
+from ..telemetry import LiveView
 from ._estop import EmergencyStop
-from ._live import LiveView
 from ._monitoring import StateMethods
 from ._offloop import blocking_action, run_off_loop
 

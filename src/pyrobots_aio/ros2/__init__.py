@@ -20,7 +20,9 @@ running inside ``async with robot``:
 (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock ``Bool``): the motion
 actions and the random walk run on it as on the simulator.
 
-Layer: beside ``sim``, on the public API only.
+Layer: above ``sim`` (which it does not import) and below ``cli``, on the public API only.
+A program beside a ``sim-node --rate R`` runs at its pace with
+`pyrobots_aio.loops.run_scaled`.
 """
 
 from ._diagnostics import staleness as staleness
@@ -32,8 +34,6 @@ from ._robot import CLIFF_SENSORS as CLIFF_SENSORS
 from ._robot import DOCK_IN_ODOM as DOCK_IN_ODOM
 from ._robot import IR_SENSORS as IR_SENSORS
 from ._robot import Ros2Robot as Ros2Robot
-from ._run import run as run
-from ._run import scaled_loop as scaled_loop
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
@@ -50,7 +50,5 @@ __all__ = [
     "attach_ros2",
     "qos_profile",
     "ros_name",
-    "run",
-    "scaled_loop",
     "staleness",
 ]

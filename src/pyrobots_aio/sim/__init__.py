@@ -1,12 +1,11 @@
 """The simulated robot: MuJoCo physics, SimRobot, and lockstep virtual time.
 
 Needs the ``sim`` extra (``pip install -e ".[sim]"`` in a checkout). ``run(main)``
-runs ``main`` on a virtual-time loop whose clock *is* simulation time.
+runs ``main`` on a virtual-time loop whose clock *is* simulation time: it is
+`pyrobots_aio.loops.run_lockstep`, which holds the loops themselves.
 """
 
-from .._core._clock import is_virtual as is_virtual
-from .._core._clock import new_virtual_loop as new_virtual_loop
-from .._core._clock import run as run
+from ..loops import run_lockstep as run
 from ._backend import SimBackend as SimBackend
 from ._frames import WorldFrames as WorldFrames
 from ._models import model_path as model_path
@@ -21,9 +20,7 @@ __all__ = [
     "SimRobot",
     "SimWorld",
     "WorldFrames",
-    "is_virtual",
     "model_path",
     "models_dir",
-    "new_virtual_loop",
     "run",
 ]

@@ -20,9 +20,9 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING, cast
 
-from .._core._clock import VirtualTimeLoop, is_virtual
 from .._core._numbers import finite
 from .._exceptions import LockstepError
+from ..loops import VirtualTimeLoop, is_virtual
 from ..motion import Controllers
 
 if TYPE_CHECKING:

@@ -18,7 +18,7 @@ import pytest
 import pytest_asyncio
 
 from .. import EventKind, Robot
-from ..sim import new_virtual_loop
+from ..loops import new_virtual_loop
 from ._events import EventLog
 
 if TYPE_CHECKING:

@@ -28,7 +28,7 @@ lets each further busy iteration take virtual time up to the next timer, as
 if the busy work took that long, until it waits again. This depends only on
 iteration counts, so it stays deterministic.
 
-Entry points: `run` (like ``asyncio.run``/``anyio.run``), `new_virtual_loop`
+Entry points: `run_lockstep` (like ``asyncio.run``/``anyio.run``), `new_virtual_loop`
 (a ``loop_factory`` for ``asyncio.Runner``, ``anyio.run`` backend options and
 pytest-asyncio's ``pytest_asyncio_loop_factories`` hook) and
 `VirtualTimePolicy` for code that still configures loops through policies.
@@ -44,8 +44,8 @@ import sys
 import warnings
 from typing import TYPE_CHECKING, Any, TypeVar, TypeVarTuple
 
+from .._core._numbers import finite
 from .._exceptions import EventLoopError
-from ._numbers import finite
 
 if TYPE_CHECKING:
     from collections import deque
@@ -176,7 +176,7 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
             ...     loop.call_later(2.0, lambda: None)
             ...     loop.call_later(1.0, lambda: None).cancel()
             ...     return [timer.when() for timer in loop.pending_timers()]
-            >>> run(main)
+            >>> run_lockstep(main)
             [2.0]
         """
         scheduled: list[asyncio.TimerHandle] = self._scheduled  # type: ignore[attr-defined]
@@ -191,7 +191,7 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
             ...     loop.call_soon(lambda: None)
             ...     loop.call_soon(lambda: None).cancel()
             ...     return len(loop.ready_callbacks())
-            >>> run(main)
+            >>> run_lockstep(main)
             1
         """
         ready: deque[asyncio.Handle] = self._ready  # type: ignore[attr-defined]
@@ -213,7 +213,7 @@ class VirtualTimeLoop(asyncio.SelectorEventLoop):
             ...     now = loop.time()
             ...     loop.call_later(0.5, lambda: None)
             ...     return skipped, now, loop.skip_ahead(2.0)  # a timer falls due first
-            >>> run(main)
+            >>> run_lockstep(main)
             (True, 1.0, False)
 
         Raises:
@@ -281,7 +281,7 @@ with warnings.catch_warnings():
     class VirtualTimePolicy(asyncio.DefaultEventLoopPolicy):
         """An event loop policy whose new loops are `VirtualTimeLoop`s.
 
-        Prefer `run` or a ``loop_factory`` (`new_virtual_loop`); policies are
+        Prefer `run_lockstep` or a ``loop_factory`` (`new_virtual_loop`); policies are
         deprecated from Python 3.14 on.
         """
 
@@ -290,7 +290,7 @@ with warnings.catch_warnings():
             return new_virtual_loop()
 
 
-def run(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -> _T:
+def run_lockstep(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -> _T:
     """Run ``main(*args)`` on a fresh virtual-time loop and return its result.
 
     Like ``asyncio.run``/``anyio.run``: remaining tasks are cancelled, async
@@ -313,7 +313,7 @@ def run(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -> _T:
         >>> async def later(delay: float) -> float:
         ...     await asyncio.sleep(delay)
         ...     return asyncio.get_running_loop().time()
-        >>> run(later, 60)
+        >>> run_lockstep(later, 60)
         60.0
     """
     if asyncio._get_running_loop() is None:  # not inside an except clause: no stray context

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Mapping
 
     from ..state import Subscription
-    from ._robot import Robot
+    from ._source import TelemetrySource
 
 __all__ = ["POSE_EPSILON", "Pose2D", "StateSampler"]
 
@@ -60,14 +60,14 @@ class StateSampler:
         self._order = None if keys is None else tuple(sorted(keys))
         self._period = period
         self.pose_frame = pose_frame
-        self._robot: Robot | None = None
+        self._robot: TelemetrySource | None = None
         self._subscription: Subscription | None = None
         self._values: dict[str, object] = {}
         self._stamps: dict[str, float] = {}
         self._pose: Pose2D | None = None
         self._pose_stamp = -math.inf
 
-    def start(self, robot: Robot) -> None:
+    def start(self, robot: TelemetrySource) -> None:
         """Sample ``robot`` from now on, starting with the values it holds.
 
         The pose is sampled only if ``robot.poses`` knows the frame now

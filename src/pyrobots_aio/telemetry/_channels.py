@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from .._core._instrument import ExecEvent
-    from .sampling import Pose2D
+    from ._sampling import Pose2D
 
 __all__ = [
     "ACTIONS",

@@ -10,12 +10,12 @@ import anyio
 import pytest
 
 from pyrobots_aio import EventLoopError
-from pyrobots_aio._core._clock import (
+from pyrobots_aio.loops import (
     VirtualTimeLoop,
     VirtualTimePolicy,
     is_virtual,
     new_virtual_loop,
-    run,
+    run_lockstep,
 )
 
 if TYPE_CHECKING:
@@ -46,7 +46,7 @@ def test_sleeping_an_hour_takes_exactly_an_hour_of_virtual_time() -> None:
         seen.append(_now())
         return seen
 
-    assert run(main) == [0.0, 3600.0, 3600.0 + 3 * 86400]
+    assert run_lockstep(main) == [0.0, 3600.0, 3600.0 + 3 * 86400]
 
 
 def test_sleeps_and_timers_fire_in_real_time_order() -> None:
@@ -65,7 +65,7 @@ def test_sleeps_and_timers_fire_in_real_time_order() -> None:
                 tg.create_task(sleeper(name, delay))
         return log
 
-    assert run(main) == [
+    assert run_lockstep(main) == [
         ("call_at", 0.25),
         ("a", 0.5),
         ("b", 1.0),
@@ -85,7 +85,7 @@ def test_asyncio_timeout_fires_at_its_virtual_deadline() -> None:
             await asyncio.wait_for(asyncio.sleep(10), 0.75)
         return after_timeout, _now()
 
-    assert run(main) == (2.5, 3.25)
+    assert run_lockstep(main) == (2.5, 3.25)
 
 
 def test_wait_for_returns_when_the_awaitable_is_faster() -> None:
@@ -96,7 +96,7 @@ def test_wait_for_returns_when_the_awaitable_is_faster() -> None:
 
         return await asyncio.wait_for(slow(), 5), _now()
 
-    assert run(main) == ("done", 4.0)
+    assert run_lockstep(main) == ("done", 4.0)
 
 
 def test_periodic_call_at_at_50_hz_ticks_500_times_in_10_seconds() -> None:
@@ -116,7 +116,7 @@ def test_periodic_call_at_at_50_hz_ticks_500_times_in_10_seconds() -> None:
         await finished
         return ticks, loop.time()
 
-    ticks, end = run(main)
+    ticks, end = run_lockstep(main)
     assert len(ticks) == 500
     assert ticks == [n / 50 for n in range(1, 501)]  # each tick lands on its own due time
     assert end == 10.0
@@ -140,7 +140,7 @@ def test_periodic_call_later_drifts_no_more_than_its_own_float_sums() -> None:
         await finished
         return count, loop.time()
 
-    count, end = run(main)
+    count, end = run_lockstep(main)
     assert count == 500
     assert end == pytest.approx(10.0, abs=1e-9)
 
@@ -168,14 +168,14 @@ def test_sleeping_forever_is_never_woken_by_the_jump_to_the_next_timer() -> None
         task.cancel()
         return got, await task, _now()
 
-    assert run(main) == ("hi", "cancelled at 5.0", 5.0)
+    assert run_lockstep(main) == ("hi", "cancelled at 5.0", 5.0)
 
 
 def test_to_thread_completes_when_no_timer_is_pending() -> None:
     async def main() -> tuple[int, float]:
         return await asyncio.to_thread(sum, range(100_000)), _now()
 
-    assert run(main) == (4999950000, 0.0)
+    assert run_lockstep(main) == (4999950000, 0.0)
 
 
 def test_thread_work_takes_no_virtual_time_while_timers_are_pending() -> None:
@@ -192,7 +192,7 @@ def test_thread_work_takes_no_virtual_time_while_timers_are_pending() -> None:
         await asyncio.sleep(1)
         return during, after_thread, fired[-1]
 
-    assert run(main) == ([], 0.0, 0.1)
+    assert run_lockstep(main) == ([], 0.0, 0.1)
 
 
 def test_call_soon_threadsafe_wakes_a_loop_with_nothing_scheduled() -> None:
@@ -206,7 +206,7 @@ def test_call_soon_threadsafe_wakes_a_loop_with_nothing_scheduled() -> None:
         finally:
             thread.join()
 
-    assert run(main) == ("hi", 0.0)
+    assert run_lockstep(main) == ("hi", 0.0)
 
 
 def test_socket_io_is_served_without_advancing_virtual_time() -> None:
@@ -224,7 +224,7 @@ def test_socket_io_is_served_without_advancing_virtual_time() -> None:
             right.close()
         return line, loop.time()
 
-    assert run(main) == (b"ping\n", 0.0)
+    assert run_lockstep(main) == (b"ping\n", 0.0)
 
 
 def test_skip_ahead_moves_time_on_only_when_nothing_would_run_before() -> None:
@@ -276,7 +276,7 @@ def test_run_passes_arguments_and_returns_the_result() -> None:
         await asyncio.sleep(1)
         return a + b
 
-    assert run(add, 2, 3) == 5
+    assert run_lockstep(add, 2, 3) == 5
 
 
 def test_run_propagates_the_exception_of_main() -> None:
@@ -285,7 +285,7 @@ def test_run_propagates_the_exception_of_main() -> None:
         raise ValueError(message)
 
     with pytest.raises(ValueError, match=r"^broken at t=1$"):
-        run(fail, "broken at t=1")
+        run_lockstep(fail, "broken at t=1")
 
 
 def test_run_closes_the_loop_and_cleans_up_what_main_left_behind() -> None:
@@ -309,7 +309,7 @@ def test_run_closes_the_loop_and_cleans_up_what_main_left_behind() -> None:
         await anext(gen)
         left["worker"] = await asyncio.get_running_loop().run_in_executor(None, which_thread)
 
-    run(main)
+    run_lockstep(main)
     loop, task, worker = left["loop"], left["task"], left["worker"]
     assert isinstance(loop, VirtualTimeLoop)
     assert loop.is_closed()
@@ -325,10 +325,10 @@ def test_run_refuses_to_nest_in_a_running_loop() -> None:
         await asyncio.sleep(0)
 
     async def outer() -> None:
-        run(inner)
+        run_lockstep(inner)
 
     with pytest.raises(EventLoopError) as caught:  # a RuntimeError too
-        run(outer)
+        run_lockstep(outer)
     assert isinstance(caught.value, RuntimeError)
     assert str(caught.value) == (
         "pyrobots_aio.sim.run(inner) cannot run inside a running event loop: it runs inner on "
@@ -342,8 +342,8 @@ def test_run_in_a_thread_from_a_running_app_works_as_the_error_says() -> None:
         await asyncio.sleep(hours * 3600)
         return asyncio.get_running_loop().time()
 
-    async def app() -> float:
-        return await asyncio.to_thread(run, lockstep, 2)  # two simulated hours, in virtual time
+    async def app() -> float:  # two simulated hours, in virtual time
+        return await asyncio.to_thread(run_lockstep, lockstep, 2)
 
     assert asyncio.run(app()) == 7200.0
 
@@ -360,7 +360,7 @@ def test_anyio_sleep_and_fail_after_run_in_virtual_time() -> None:
             await anyio.Event().wait()
         return slept, failed, anyio.current_time()
 
-    assert run(main) == (2.0, 3.5, 3.75)
+    assert run_lockstep(main) == (2.0, 3.5, 3.75)
 
 
 def test_anyio_run_accepts_the_virtual_loop_factory() -> None:
@@ -396,7 +396,7 @@ def test_pending_timers_lists_live_timers_earliest_first() -> None:
         seen.append([timer.when() for timer in loop.pending_timers()])
         return seen
 
-    assert run(main) == [[], [2.0, 5.0], [5.0], []]
+    assert run_lockstep(main) == [[], [2.0, 5.0], [5.0], []]
 
 
 def test_ready_callbacks_lists_what_runs_at_the_next_iteration() -> None:
@@ -411,7 +411,7 @@ def test_ready_callbacks_lists_what_runs_at_the_next_iteration() -> None:
         seen.append(loop.ready_callbacks())
         return queued, seen
 
-    queued, seen = run(main)
+    queued, seen = run_lockstep(main)
     assert seen == [[], queued, []]
 
 
@@ -430,7 +430,7 @@ def test_pytest_asyncio_runs_marked_tests_on_the_virtual_loop(pytester: pytest.P
         textwrap.dedent(
             """
             import asyncio
-            from pyrobots_aio._core._clock import new_virtual_loop
+            from pyrobots_aio.loops import new_virtual_loop
 
             def pytest_configure(config):
                 config.addinivalue_line("markers", "virtual_time: run on the virtual loop")
@@ -448,7 +448,7 @@ def test_pytest_asyncio_runs_marked_tests_on_the_virtual_loop(pytester: pytest.P
             import asyncio
             import pytest
             import pytest_asyncio
-            from pyrobots_aio._core._clock import is_virtual
+            from pyrobots_aio.loops import is_virtual
 
             pytestmark = pytest.mark.virtual_time
 
@@ -475,7 +475,7 @@ def test_pytest_asyncio_runs_marked_tests_on_the_virtual_loop(pytester: pytest.P
             """
             import asyncio
             import pytest
-            from pyrobots_aio._core._clock import is_virtual
+            from pyrobots_aio.loops import is_virtual
 
             @pytest.mark.asyncio
             async def test_unmarked_tests_keep_the_real_loop():

@@ -20,16 +20,16 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import PyRobotsError
-from .channels import FIXED_CHANNELS, SCHEMAS, FoxgloveChannels, LogForwarder, strict_json
-from .sampling import StateSampler
+from ._channels import FIXED_CHANNELS, SCHEMAS, FoxgloveChannels, LogForwarder, strict_json
+from ._sampling import StateSampler
 
 if TYPE_CHECKING:
     from types import ModuleType
 
     from .._core._instrument import ExecEvent
-    from ._robot import Robot
-    from .channels import Message
-    from .sampling import Pose2D
+    from ._channels import Message
+    from ._sampling import Pose2D
+    from ._source import TelemetrySource
 
 _log = logging.getLogger("pyrobots_aio.live")
 LOGGER = "pyrobots_aio"
@@ -104,7 +104,7 @@ class LiveView:
         self._server: Any = None
         self._context: Any = None
         self._channels: dict[str, Any] = {}
-        self._robot: Robot | None = None
+        self._robot: TelemetrySource | None = None
         self._encoder = FoxgloveChannels(0, 0.0)
         self._sampler = StateSampler(self._samples)
         self._forwarder: LogForwarder | None = None
@@ -114,7 +114,7 @@ class LiveView:
         """The port served on, while serving."""
         return None if self._server is None else int(self._server.port)
 
-    def start(self, robot: Robot) -> None:
+    def start(self, robot: TelemetrySource) -> None:
         """Start serving ``robot``'s channels.
 
         Raises:

@@ -1,0 +1,51 @@
+"""Telemetry: the Foxglove channels of a run, state sampling, and the live view.
+
+- `FoxgloveChannels` turns the executive's events, state samples, the pose and
+  log records into the messages of the Foxglove channels (`FIXED_CHANNELS`,
+  schemas in `SCHEMAS`, strict JSON);
+- `StateSampler` passes on what each write of a robot's state brings;
+- `LiveView` serves those channels over Foxglove's WebSocket protocol while a
+  robot runs (``Robot(serve=PORT)``).
+
+The recorders (`pyrobots_aio.recording`) and the live view share them, so a
+recording and the live view carry the same messages.
+
+Layer: below the robot, beside ``actions`` and ``events``. The robot owns its
+live view, so it imports telemetry; telemetry reads the robot only through
+`TelemetrySource` (its state, poses, clock and instruments), a protocol that
+`pyrobots_aio.Robot` meets, and never imports the robot.
+"""
+
+from ._channels import EVENT as EVENT
+from ._channels import FIXED_CHANNELS as FIXED_CHANNELS
+from ._channels import POSE_IN_FRAME as POSE_IN_FRAME
+from ._channels import SAMPLE as SAMPLE
+from ._channels import SCHEMAS as SCHEMAS
+from ._channels import FoxgloveChannels as FoxgloveChannels
+from ._channels import LogForwarder as LogForwarder
+from ._channels import Message as Message
+from ._channels import finite as finite
+from ._channels import jsonable as jsonable
+from ._channels import strict_json as strict_json
+from ._live import LiveView as LiveView
+from ._sampling import Pose2D as Pose2D
+from ._sampling import StateSampler as StateSampler
+from ._source import TelemetrySource as TelemetrySource
+
+__all__ = [
+    "EVENT",
+    "FIXED_CHANNELS",
+    "POSE_IN_FRAME",
+    "SAMPLE",
+    "SCHEMAS",
+    "FoxgloveChannels",
+    "LiveView",
+    "LogForwarder",
+    "Message",
+    "Pose2D",
+    "StateSampler",
+    "TelemetrySource",
+    "finite",
+    "jsonable",
+    "strict_json",
+]
