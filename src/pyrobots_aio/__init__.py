@@ -49,6 +49,7 @@ from ._exceptions import Ros2NameError as Ros2NameError
 from ._exceptions import Ros2UnavailableError as Ros2UnavailableError
 from ._exceptions import SimulationError as SimulationError
 from ._exceptions import SimulationUnavailableError as SimulationUnavailableError
+from ._exceptions import StallError as StallError
 from ._exceptions import StateError as StateError
 from ._exceptions import StateMachineError as StateMachineError
 from ._exceptions import TooManyActions as TooManyActions
@@ -141,6 +142,7 @@ __all__ = [
     "Ros2UnavailableError",
     "SimulationError",
     "SimulationUnavailableError",
+    "StallError",
     "StateError",
     "StateMachine",
     "StateMachineError",

@@ -27,7 +27,8 @@ PyRobotsError
 │   ├── ModelLoadError            an MJCF file that does not load
 │   └── LockstepError             a lockstep robot outside the lockstep loop
 ├── MotionError                   a motion action that cannot do its job (docking failed)
-│   └── EmergencyStopError        motion refused: the emergency stop is latched (.reason)
+│   ├── EmergencyStopError        motion refused: the emergency stop is latched (.reason)
+│   └── StallError                a motion commanded the wheels and went nowhere (.action, ...)
 ├── StateMachineError             a StateMachine refused when built (unknown state, bad trigger)
 ├── RecordingError
 │   └── CorruptRecordingError     a recording line that cannot be read (.line)
@@ -278,6 +279,32 @@ class EmergencyStopError(MotionError):
         super().__init__(
             f"{what} refused: the emergency stop is latched ({reason!r}); call "
             "robot.clear_emergency_stop() once it is safe to move"
+        )
+
+
+class StallError(MotionError):
+    """A motion action commanded motion and its odometry showed no progress: the robot is blocked.
+
+    Raised by the motion actions of a `DriveBase` once no progress lasted the
+    base's ``stall_timeout`` (see `pyrobots_aio.motion.StallWatch`); the
+    wheels are stopped.
+
+    Attributes:
+        action: The motion action's name (``"drive_distance"``).
+        command: The wheel command ``(v, w)`` (m/s, rad/s) that went nowhere.
+        seconds: How long it went without progress.
+        timeout: The base's ``stall_timeout`` then.
+    """
+
+    def __init__(
+        self, action: str, command: tuple[float, float], seconds: float, timeout: float
+    ) -> None:
+        self.action, self.command, self.seconds, self.timeout = action, command, seconds, timeout
+        v, w = command
+        super().__init__(
+            f"{action} stalled: the wheels were commanded v={v + 0.0:.3g} m/s, "
+            f"w={w + 0.0:.3g} rad/s, and the odometry showed no progress for {seconds:.2f} s "
+            f"(something blocks the robot; the bound is robot.stall_timeout = {timeout:g} s)"
         )
 
 

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from pyrobots_aio import MotionError, UnknownFrameError
+from pyrobots_aio import MotionError, StallError, UnknownFrameError
 from pyrobots_aio.testing import FakeBase, FakeWorld
 
 
@@ -22,7 +22,7 @@ def test_the_world_moves_along_exact_arcs() -> None:
     assert world.odom_pose() == pytest.approx(world.base_pose())
 
 
-def test_a_wall_stops_the_robot_presses_the_bumper_and_the_wheels_slip() -> None:
+def test_a_wall_stops_the_robot_presses_the_bumper_and_the_wheels_stall() -> None:
     world = FakeWorld(start=(1.5, 0.0, 0.0))
     assert world.read_sensors()["bumper"] is False
     world.set_command(0.2, 0.0)
@@ -30,7 +30,7 @@ def test_a_wall_stops_the_robot_presses_the_bumper_and_the_wheels_slip() -> None
         world.step(0.02)
     x, y, _ = world.base_pose()
     assert (x, y) == (pytest.approx(2.0 - 0.171), 0.0)
-    assert world.odom_pose()[0] == pytest.approx(1.0)  # the odometry counts the slipping wheels
+    assert world.odom_pose() == pytest.approx((0.329, 0.0, 0.0))  # the wheels stalled there
     state = world.read_sensors()
     assert (state["bumper"], state["bumper_left"], state["bumper_right"]) == (True, True, True)
     world.place(2.0 - 0.171, 0.0, math.pi / 2)  # the wall on the right
@@ -63,29 +63,78 @@ def test_docked_when_the_charging_contacts_lie_on_the_pad() -> None:
     assert rotated.base_pose() == pytest.approx((0.0, 1.9 - 0.173, -math.pi / 2))
 
 
+def test_the_odometry_follows_a_robot_sliding_along_a_wall() -> None:
+    world = FakeWorld(start=(1.5, 0.0, math.pi / 4))
+    world.set_command(0.2, 0.0)
+    for _ in range(250):  # into the east wall at 45 degrees, then along it
+        world.step(0.02)
+    x, y, yaw = world.base_pose()
+    assert (x, yaw) == pytest.approx((2.0 - 0.171, math.pi / 4))
+    assert 0.5 < y < 0.71  # it slid north, slower than it drove
+    c = s = math.sqrt(0.5)  # the odometry started facing its x axis: the map turned by -45 degrees
+    expected = (c * (x - 1.5) + s * y, -s * (x - 1.5) + c * y, 0.0)
+    assert world.odom_pose() == pytest.approx(expected, abs=1e-9)  # as the robot went
+    assert world.read_sensors()["bumper"] is True
+
+
+def test_jammed_wheels_move_nothing() -> None:
+    world = FakeWorld(start=(0.0, 0.0, 0.0))
+    world.jammed = True
+    world.set_command(0.2, 1.0)
+    world.step(1.0)
+    assert (world.base_pose(), world.odom_pose()) == ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    world.jammed = False
+    world.step(0.5)
+    assert world.base_pose()[0] > 0.09
+
+
 @pytest.mark.asyncio
 @pytest.mark.virtual_time
-async def test_docking_behind_an_obstacle_fails_with_a_clear_error() -> None:
+async def test_docking_behind_an_obstacle_fails_with_a_stall() -> None:
     in_front_of_the_dock = (-1.75, -0.3, -1.65, 0.3)
     async with FakeBase(obstacles=[in_front_of_the_dock], start=(0.0, 0.0, 0.0)) as robot:
-        with pytest.raises(MotionError) as caught:
+        with pytest.raises(StallError) as caught:
             await robot.dock()
-        assert str(caught.value) == ("docking failed: reversed 0.7 m without touching the dock")
+        assert str(caught.value) == (
+            "dock stalled: the wheels were commanded v=-0.05 m/s, w=0 rad/s, and the odometry "
+            "showed no progress for 1.50 s (something blocks the robot; the bound is "
+            "robot.stall_timeout = 1.5 s)"
+        )
         assert not robot.state.docked
         assert robot.world.command == (0.0, 0.0)
 
 
+class Mislocalised(FakeBase):
+    """A robot that believes it is 0.4 m north of where it is."""
+
+    def map_pose(self) -> tuple[float, float, float]:
+        x, y, yaw = super().map_pose()
+        return x, y + 0.4, yaw
+
+
 @pytest.mark.asyncio
 @pytest.mark.virtual_time
-async def test_the_odom_frame_follows_the_slipping_odometry() -> None:
+async def test_docking_beside_the_dock_fails_once_it_reversed_too_far() -> None:
+    room_behind_the_dock = (-3.0, -2.0, 2.0, 2.0)
+    async with Mislocalised(room=room_behind_the_dock, start=(0.0, 0.4, 0.0)) as robot:
+        with pytest.raises(MotionError) as caught:
+            await robot.dock()
+        assert str(caught.value) == "docking failed: reversed 0.7 m without touching the dock"
+        assert not robot.state.docked
+        assert robot.world.base_pose()[:2] == pytest.approx((-1.45 - 0.7, -0.4), abs=0.03)
+
+
+@pytest.mark.asyncio
+@pytest.mark.virtual_time
+async def test_the_odom_frame_places_base_link_at_the_odometry() -> None:
     async with FakeBase(start=(1.5, 0.0, 0.0)) as robot:
-        robot.drive(0.2, 0.0)
+        robot.drive(0.2, 0.1)  # into the east wall, sliding along it
         await robot.sleep(3.0)
         robot.stop()
-        assert robot.odom_pose()[0] == pytest.approx(0.6)  # 3 s at 0.2 m/s of the wheels ...
-        assert robot.world.base_pose()[0] == pytest.approx(2.0 - 0.171)  # ... against a wall
+        assert robot.odom_pose()[0] == pytest.approx(2.0 - 0.171 - 1.5, abs=0.01)
         seen = robot.poses.inframe("base_link", "odom")
         assert (seen.x, seen.y) == pytest.approx(robot.odom_pose()[:2])
+        assert robot.poses.euler(seen)[2] == pytest.approx(robot.odom_pose()[2])
         dock = robot.poses.inframe("dock", "map")
         assert (dock.x, dock.y) == pytest.approx((-1.9, 0.0))
         with pytest.raises(UnknownFrameError, match=r"^unknown frame 'arm'; known frames: \["):

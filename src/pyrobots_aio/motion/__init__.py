@@ -5,7 +5,8 @@ in-memory `pyrobots_aio.testing.FakeBase`) provides the seam: a velocity
 command, odometry and a per-tick control hook (`Controllers`). The motion
 actions (``drive_distance``, ``rotate_angle``, ``navigate_to``, ``dock``,
 ``undock``) and the random walk (`pyrobots_aio.sim.random_walk`) are written
-once against it, so the same behaviour runs on each.
+once against it, so the same behaviour runs on each, stall detection
+(`StallWatch`, `STALL_TIMEOUT`) included.
 """
 
 from ._base import ANGLE_TOLERANCE as ANGLE_TOLERANCE
@@ -22,6 +23,10 @@ from ._math import MAX_DISTANCE as MAX_DISTANCE
 from ._math import MAX_TURN as MAX_TURN
 from ._math import limit_speeds as limit_speeds
 from ._math import wrap_angle as wrap_angle
+from ._stall import STALL_TIMEOUT as STALL_TIMEOUT
+from ._stall import STALL_TRAVEL as STALL_TRAVEL
+from ._stall import STALL_TURN as STALL_TURN
+from ._stall import StallWatch as StallWatch
 
 __all__ = [
     "ANGLE_TOLERANCE",
@@ -29,11 +34,15 @@ __all__ = [
     "DOCK_APPROACH",
     "MAX_DISTANCE",
     "MAX_TURN",
+    "STALL_TIMEOUT",
+    "STALL_TRAVEL",
+    "STALL_TURN",
     "UNDOCK_DISTANCE",
     "WHEELS",
     "Controllers",
     "DriveBase",
     "Pose2D",
+    "StallWatch",
     "World",
     "WorldBase",
     "limit_speeds",

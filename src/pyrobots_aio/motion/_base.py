@@ -8,26 +8,33 @@ action locks `WHEELS`, drives through a per-tick controller on the base's
 own measures (as a robot's firmware would), and stops the wheels when it ends
 for any reason, cancellation and preemption included. While the robot's
 emergency stop is latched (``robot.emergency_stop(reason)``, which stops the
-wheels at once), the motion actions and ``drive`` refuse to move.
+wheels at once), the motion actions and ``drive`` refuse to move. A motion
+action that commands motion and sees no odometry progress for
+`DriveBase.stall_timeout` seconds (`STALL_TIMEOUT`) fails with a `StallError`
+(`StallWatch`): the robot is blocked.
 """
 
 from __future__ import annotations
 
 import abc
 import math
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-from .._core._numbers import shown
+from .._core._numbers import finite, shown
 from .._exceptions import MotionError
 from ..actions import action, current_action, lock
 from ..resources import Resource
 from ..robot import Robot
 from ._math import MAX_DISTANCE, MAX_TURN, checked, ramp, wrap_angle
+from ._stall import STALL_TIMEOUT, StallWatch
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
     from ..poses import PoseLike
+    from ._stall import Velocity
+
+    Step = Callable[[], Velocity | None]  # the command for the next tick; None: arrived
 
 WHEELS = Resource("wheels")
 """The drive wheels: every motion action holds them."""
@@ -82,6 +89,12 @@ class DriveBase(Robot, abc.ABC):
     ``cliff_<position>``, ``docked``, ``v`` and ``w``, and provides the
     frames ``odom``, ``base_link`` and, for `dock`, ``dock``.
 
+    Args:
+        stall_timeout: Seconds a motion action may command motion without
+            odometry progress before it fails with a `StallError` (default
+            `STALL_TIMEOUT`, 1.5 s; `stall_timeout` changes it later).
+        **options: `Robot` options (``instruments``, ``max_actions`` ...).
+
     Example:
         >>> from pyrobots_aio.sim import run
         >>> from pyrobots_aio.testing import FakeBase
@@ -92,6 +105,27 @@ class DriveBase(Robot, abc.ABC):
         >>> run(main)
         1.0
     """
+
+    def __init__(self, *, stall_timeout: float = STALL_TIMEOUT, **options: Any) -> None:
+        super().__init__(**options)
+        self.stall_timeout = stall_timeout
+
+    @property
+    def stall_timeout(self) -> float:
+        """Seconds a motion action may command motion without odometry progress.
+
+        Past it, the action stops the wheels and fails with a `StallError` (a
+        `MotionError`) naming itself, the command and the time (see `StallWatch` for what
+        counts as progress). A positive number of seconds; a base whose motions
+        start slowly (a heavy payload) may want more.
+        """
+        return self._stall_timeout
+
+    @stall_timeout.setter
+    def stall_timeout(self, seconds: float) -> None:
+        self._stall_timeout = finite(
+            "stall_timeout", seconds, positive=True, must="a positive number of seconds"
+        )
 
     # -- the seam ---------------------------------------------------------
 
@@ -168,14 +202,12 @@ class DriveBase(Robot, abc.ABC):
             x, y, _ = self.odom_pose()
             return math.hypot(x - x0, y - y0)
 
-        def step() -> bool:
+        def step() -> Velocity | None:
             remaining = abs(goal) - travelled()
             v = ramp(remaining, top, _MIN_V)
             if self._arrived(remaining, v, DISTANCE_TOLERANCE):
-                self.stop()
-                return True
-            self._set_velocity(v if goal >= 0 else -v, 0.0)
-            return False
+                return None
+            return (v if goal >= 0 else -v, 0.0)
 
         await self._steer(step)
         return math.copysign(travelled(), goal)
@@ -192,17 +224,15 @@ class DriveBase(Robot, abc.ABC):
         top = checked("speed", speed, positive=True)
         turned, last = 0.0, self.odom_pose()[2]
 
-        def step() -> bool:
+        def step() -> Velocity | None:
             nonlocal turned, last
             yaw = self.odom_pose()[2]
             turned, last = turned + wrap_angle(yaw - last), yaw
             remaining = goal - turned
             w = ramp(remaining, top, _MIN_W)
             if self._arrived(remaining, w, ANGLE_TOLERANCE):
-                self.stop()
-                return True
-            self._set_velocity(0.0, w)
-            return False
+                return None
+            return (0.0, w)
 
         await self._steer(step)
         return turned
@@ -226,21 +256,18 @@ class DriveBase(Robot, abc.ABC):
             )
             raise ValueError(msg)
 
-        def step() -> bool:
+        def step() -> Velocity | None:
             x, y, yaw = self.map_pose()
             dist = math.hypot(tx - x, ty - y)
             if dist > DISTANCE_TOLERANCE * 5:
                 error = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
                 v = 0.0 if abs(error) > 0.3 else ramp(dist, top, _MIN_V)
-                self._set_velocity(v, ramp(error, 1.0, _MIN_W) if abs(error) > 0.01 else 0.0)
-                return False
+                return (v, ramp(error, 1.0, _MIN_W) if abs(error) > 0.01 else 0.0)
             error = wrap_angle(tyaw - yaw)
             w = ramp(error, 1.0, _MIN_W)
             if self._arrived(error, w, ANGLE_TOLERANCE):
-                self.stop()
-                return True
-            self._set_velocity(0.0, w)
-            return False
+                return None
+            return (0.0, w)
 
         await self._steer(step)
 
@@ -256,26 +283,33 @@ class DriveBase(Robot, abc.ABC):
     async def dock(self) -> None:
         """Go in front of the dock (`DOCK_APPROACH`), then reverse slowly onto it until ``docked``.
 
+        Reversing is blind: it keeps the line the approach left it on. So if
+        the action is frozen while reversing (paused, or suspended while a
+        reflex borrows the wheels and moves the robot), it lines up in front
+        of the dock again before reversing again.
+
         Raises:
-            MotionError: The robot reversed 0.7 m without docking.
+            MotionError: The robot reversed 0.7 m without docking, or stalled
+                (`StallError`).
         """
-        if self.state["docked"]:
-            return
-        await self.navigate_to(DOCK_APPROACH)
+        while not self.state["docked"]:
+            await self.navigate_to(DOCK_APPROACH)
+            await self._reverse_onto_dock()
+
+    async def _reverse_onto_dock(self) -> None:
+        """Reverse slowly until ``docked``; return early if frozen meanwhile (the line is lost)."""
         x0, y0, _ = self.odom_pose()
 
-        def step() -> bool:
+        def step() -> Velocity | None:
             if self.state["docked"]:
-                self.stop()
-                return True
+                return None
             x, y, _ = self.odom_pose()
             if math.hypot(x - x0, y - y0) > _DOCK_REVERSE_LIMIT:
                 msg = f"docking failed: reversed {_DOCK_REVERSE_LIMIT} m without touching the dock"
                 raise MotionError(msg)
-            self._set_velocity(-_DOCK_SPEED, 0.0)
-            return False
+            return (-_DOCK_SPEED, 0.0)
 
-        await self._steer(step)
+        await self._steer(step, until_thawed=True)
 
     def _arrived(self, remaining: float, speed: float, tolerance: float) -> bool:
         """Whether to stop now, ``remaining`` from the goal and about to go at ``speed``.
@@ -286,16 +320,36 @@ class DriveBase(Robot, abc.ABC):
         """
         return abs(remaining) <= min(tolerance, abs(speed) * self.control_period / 2)
 
-    async def _steer(self, step: Callable[[], bool]) -> None:
-        """Run ``step`` now and after every tick until it returns True; stop the wheels after.
+    async def _steer(self, step: Step, *, until_thawed: bool = False) -> None:
+        """Send the command ``step`` returns, now and after every tick, until it returns None.
+
+        The wheels stop when it ends, for any reason. A command that makes no
+        progress for `stall_timeout` seconds ends it with a `StallError`
+        (`StallWatch`). With ``until_thawed``, it also ends at the first tick
+        after the action was frozen (paused, or suspended: the robot may have
+        been moved meanwhile).
 
         Refused (`EmergencyStopError`) while the emergency stop is latched.
         """
         handle = current_action.get()
-        self._refuse_motion(handle.name if handle is not None else "motion")
+        name = handle.name if handle is not None else "motion"
+        self._refuse_motion(name)
+        watch = StallWatch(self, handle, name)
+
+        def tick() -> bool:
+            if watch.thawed() and until_thawed:
+                return True
+            command = step()
+            if command is None:
+                self.stop()
+                return True
+            watch.check(command)
+            self._set_velocity(*command)
+            return False
+
         try:
-            if not step():
-                await self.control(step)
+            if not tick():
+                await self.control(tick)
         finally:
             self.stop()
 

@@ -181,7 +181,7 @@ class Ros2Robot(DriveBase):
         use_sim_time: The node's clock follows ``/clock``.
         domain_id: The DDS domain; default: ``ROS_DOMAIN_ID``.
         diagnostics_period: Seconds between two ``/diagnostics`` messages (None: none).
-        **options: `Robot` options (``instruments``, ``max_actions`` ...).
+        **options: `DriveBase` and `Robot` options (``stall_timeout``, ``instruments`` ...).
 
     Raises:
         Ros2UnavailableError: rclpy cannot be imported (install the ``ros2`` extra).

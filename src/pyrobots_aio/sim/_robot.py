@@ -48,7 +48,8 @@ class SimRobot(WorldBase):
         model: Another MJCF scene containing the robot (default: the shipped arena).
         control_rate: Control ticks per second; sensors reach ``robot.state`` each tick.
         physics_dt: The physics step, in seconds.
-        **options: `Robot` options (``max_actions``, ``cancel_grace``, ``instruments`` ...).
+        **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions``,
+            ``instruments`` ...).
 
     Example:
         >>> from pyrobots_aio.sim import SimRobot, run

@@ -15,7 +15,9 @@ With ``random_walk(robot, on_bump="suspend")`` the reflex is
 `suspending_reflex`, which locks with ``preempt="suspend"`` instead: the
 current motion is frozen where it stands (its pause hook parks the wheels),
 the reflex borrows the wheels, and the motion resumes with its remaining
-distance or angle once the reflex is done; no move is interrupted.
+distance or angle once the reflex is done; no move is interrupted. A dock
+suspended while reversing onto the dock lines up in front of it again (the
+reflex moved it off its line), so the walk docks in either mode.
 
 It is written against `pyrobots_aio.motion.DriveBase` alone, so it runs
 unchanged on the simulated robot, a ROS 2 robot and the in-memory
@@ -31,7 +33,7 @@ import random
 from dataclasses import dataclass
 from typing import Literal
 
-from .._exceptions import ActionInterrupted
+from .._exceptions import ActionInterrupted, StallError
 from ..actions import action, lock
 from ..motion import WHEELS, DriveBase
 
@@ -74,7 +76,8 @@ async def bumper_reflex(robot: DriveBase) -> None:
     """Back off, then turn away from the side that was hit (both sides: turn round).
 
     On the dock it only turns: the dock is behind (backing into it stalls the wheels).
-    It cancels the motion it preempts.
+    A back-off that stalls (the dock or a wall behind) ends where it stands, and
+    the reflex turns there. It cancels the motion it preempts.
     """
     await _back_off_and_turn(robot)
 
@@ -97,7 +100,10 @@ async def _back_off_and_turn(robot: DriveBase) -> None:
         _log.info("bump on the dock (left=%s right=%s): turning %.2f rad", left, right, turn)
     else:
         _log.info("bump (left=%s right=%s): backing off and turning %.2f rad", left, right, turn)
-        await robot.drive_distance(-BACK_OFF)
+        try:
+            await robot.drive_distance(-BACK_OFF)
+        except StallError as stall:
+            _log.info("backing off stalled, turning where it stands: %s", stall)
     await robot.rotate_angle(turn)
 
 

@@ -3,11 +3,13 @@
 A round robot of the Create 3's size moves as a unicycle in a walled room with
 a dock, ticking on the event loop's clock (so in virtual time, as fast as the
 CPU allows). Obstacles are boxes; the robot cannot enter them (it is pushed
-back out, its wheels slipping); its front bumper presses on contact, its IR
-rangefinders measure the distance to the boxes, and it is ``docked`` when its
-charging contacts lie on the dock's pad. No physics beyond that: commands take
-effect at once (up to the simulator's top wheel speed), odometry integrates
-the commanded speeds exactly.
+back out); its front bumper presses on contact, its IR rangefinders measure the
+distance to the boxes, and it is ``docked`` when its charging contacts lie on
+the dock's pad. No physics beyond that: commands take effect at once (up to the
+simulator's top wheel speed), odometry integrates the commanded speeds exactly
+in free space; against a box the wheels stall, as the simulator's do, and the
+odometry follows what the robot really did (nothing, head on: a motion action
+then stops with a stall).
 """
 
 from __future__ import annotations
@@ -147,6 +149,11 @@ class FakeWorld:
         obstacles: More boxes, each ``(xmin, ymin, xmax, ymax)``.
         start: Where the robot starts, ``(x, y, yaw)``; by default on the dock.
 
+    Attributes:
+        jammed: While True, the wheels do not turn whatever the command (a
+            cable caught in them): the robot and its odometry stay put. A
+            test sets it to see a motion stall anywhere, turning included.
+
     Example:
         >>> world = FakeWorld()
         >>> world.set_command(0.2, 0.0)
@@ -179,6 +186,7 @@ class FakeWorld:
             dyaw,
         )
         self.command: tuple[float, float] = (0.0, 0.0)
+        self.jammed = False
         self.place(*home)
 
     def place(self, x: float, y: float, yaw: float) -> None:
@@ -221,17 +229,30 @@ class FakeWorld:
         return self._odom
 
     def step(self, dt: float) -> None:
-        """Move for ``dt`` seconds at the command; the boxes push the robot back out."""
+        """Move for ``dt`` seconds at the command; the boxes push the robot back out.
+
+        The odometry moves by the command, or, when a box pushed the robot
+        back, by what the robot really did (its wheels stalled with it).
+        Jammed wheels (`jammed`) move nothing.
+        """
         dt = finite("dt", dt, low=0.0)
+        if self.jammed:
+            return
         v, w = self.command
-        self._odom = _arc(self._odom, v * dt, w * dt)
-        x, y, yaw = _arc(self._pose, v * dt, w * dt)
+        before = self._pose
+        x, y, yaw = _arc(before, v * dt, w * dt)
+        pushed = False
         for box in self.boxes:
             nx, ny = box.nearest(x, y)
             gap = math.hypot(x - nx, y - ny)
             if 0.0 < gap < RADIUS:
                 x, y = nx + (x - nx) * RADIUS / gap, ny + (y - ny) * RADIUS / gap
+                pushed = True
         self._pose = (x, y, yaw)
+        if pushed:
+            self._odom = _carried(self._odom, before, self._pose)
+        else:
+            self._odom = _arc(self._odom, v * dt, w * dt)
 
     def read_sensors(self) -> dict[str, object]:
         """Every reading, keyed as in ``robot.state`` (the keys of `DriveBase`)."""
@@ -289,6 +310,17 @@ def _arc(pose: Pose2D, distance: float, turn: float) -> Pose2D:
     )
 
 
+def _carried(odom: Pose2D, before: Pose2D, after: Pose2D) -> Pose2D:
+    """``odom`` moved as the robot moved from ``before`` to ``after`` (seen from the robot)."""
+    x, y, yaw = before
+    c, s = math.cos(yaw), math.sin(yaw)
+    ahead, left = c * (after[0] - x) + s * (after[1] - y), -s * (after[0] - x) + c * (after[1] - y)
+    ox, oy, oyaw = odom
+    c, s = math.cos(oyaw), math.sin(oyaw)
+    turned = math.remainder(oyaw + after[2] - yaw, math.tau)
+    return ox + c * ahead - s * left, oy + s * ahead + c * left, turned
+
+
 class FakeFrames:
     """The `FrameProvider` of a `FakeWorld`: ``odom``, ``base_link`` and ``dock``."""
 
@@ -316,7 +348,8 @@ class FakeBase(WorldBase):
     publishes ``bumper``, ``bumper_left``, ``bumper_right``, the seven
     ``ir_<position>`` ranges, four ``cliff_<position>`` (False), ``docked``,
     ``v`` and ``w``, and runs the motion controllers. ``robot.world`` (a
-    `FakeWorld`) holds the truth and lets a test ``place`` the robot. In
+    `FakeWorld`) holds the truth and lets a test ``place`` the robot or jam
+    its wheels (``robot.world.jammed = True``). In
     virtual time (``pyrobots_aio.sim.run``, ``@pytest.mark.virtual_time``) a
     minute of driving takes milliseconds; on an ordinary loop, a minute.
 
@@ -326,7 +359,7 @@ class FakeBase(WorldBase):
         dock: The dock's frame ``(x, y, yaw)`` in the map.
         obstacles: Boxes ``(xmin, ymin, xmax, ymax)`` in the room.
         start: The start pose ``(x, y, yaw)``; by default on the dock.
-        **options: `Robot` options (``max_actions``, ``instruments`` ...).
+        **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions`` ...).
 
     Example:
         >>> from pyrobots_aio.sim import run
