@@ -45,6 +45,7 @@ from ._exceptions import SimulationError as SimulationError
 from ._exceptions import SimulationUnavailableError as SimulationUnavailableError
 from ._exceptions import StateError as StateError
 from ._exceptions import StateMachineError as StateMachineError
+from ._exceptions import TooManyAbandonedCalls as TooManyAbandonedCalls
 from ._exceptions import TooManyActions as TooManyActions
 from ._exceptions import TopicTypeError as TopicTypeError
 from ._exceptions import UnknownFrameError as UnknownFrameError
@@ -140,6 +141,7 @@ __all__ = [
     "StateMachineError",
     "StateSample",
     "StateStore",
+    "TooManyAbandonedCalls",
     "TooManyActions",
     "TopicTypeError",
     "UnknownFrameError",
