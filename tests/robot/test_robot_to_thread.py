@@ -260,7 +260,8 @@ async def test_while_32_abandoned_calls_run_a_call_is_refused_with_their_count(
         gate.release.set()
         await late.wait_for(ABANDONED_CALLS)  # each reported once it is no longer counted
         assert await robot.to_thread(_answer) == 42
-    assert _to_threads() == []
+        threads = _to_threads()
+    _join(threads)  # (a thread whose call just returned may still be on its way out)
 
 
 @pytest.mark.asyncio
