@@ -52,6 +52,7 @@ from ._exceptions import SimulationUnavailableError as SimulationUnavailableErro
 from ._exceptions import StallError as StallError
 from ._exceptions import StateError as StateError
 from ._exceptions import StateMachineError as StateMachineError
+from ._exceptions import TooManyAbandonedCalls as TooManyAbandonedCalls
 from ._exceptions import TooManyActions as TooManyActions
 from ._exceptions import TopicTypeError as TopicTypeError
 from ._exceptions import UnknownFrameError as UnknownFrameError
@@ -148,6 +149,7 @@ __all__ = [
     "StateMachineError",
     "StateSample",
     "StateStore",
+    "TooManyAbandonedCalls",
     "TooManyActions",
     "TopicTypeError",
     "UnknownFrameError",

@@ -7,6 +7,7 @@ the bad value and say how to fix it.
 PyRobotsError
 ├── RobotNotRunningError          an action or monitor used with no running robot
 ├── EventLoopError                used from another thread, event loop or async library
+├── TooManyAbandonedCalls         robot.to_thread refused: abandoned calls fill its threads
 ├── ActionError
 │   ├── ActionInterrupted         awaited action was cancelled (.reason, .by, .handle)
 │   ├── ActionSkipped             action did not run: a resource was busy
@@ -49,6 +50,7 @@ ignored cancellation for two graces, to end it.
 from __future__ import annotations
 
 import asyncio
+from collections import Counter
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -83,6 +85,27 @@ class EventLoopError(PyRobotsError, RuntimeError):
     the message names the way in from elsewhere (``robot.call_soon_threadsafe``,
     ``robot.run_threadsafe``, ``anyio.from_thread.run``).
     """
+
+
+class TooManyAbandonedCalls(PyRobotsError, RuntimeError):
+    """``robot.to_thread`` refused a call: too many abandoned calls still run in its threads.
+
+    A call is abandoned when its caller is cancelled: Python cannot stop a
+    thread, so the call runs on until it returns.
+
+    Attributes:
+        running: The names of the abandoned calls' functions, one per call.
+    """
+
+    def __init__(self, name: str, running: Sequence[str]) -> None:
+        self.running = list(running)
+        counts = Counter(self.running).items()  # in the order of the first of each
+        shown = ", ".join(f"{each} ({n})" if n > 1 else each for each, n in counts)
+        super().__init__(
+            f"cannot call robot.to_thread({name}): {len(self.running)} abandoned calls still "
+            f"run in its threads ({shown}), the most it keeps; their callers were cancelled, but "
+            "Python cannot stop a thread: give the blocking calls a timeout so that they return"
+        )
 
 
 class ActionError(PyRobotsError):

@@ -31,7 +31,7 @@ from ..state import StateStore
 from ..telemetry import LiveView
 from ._estop import EmergencyStop
 from ._monitoring import StateMethods
-from ._offloop import blocking_action, run_off_loop
+from ._offloop import Workers, blocking_action
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
@@ -108,6 +108,7 @@ class Robot(StateMethods, EmergencyStop):
         self._signals: SignalStop | None = None
         self._block_threshold = check_block_threshold(block_threshold)
         self._blockwatch: BlockWatch | None = None
+        self._workers: Workers | None = None  # robot.to_thread's threads, from its first call
         self._attached: dict[str, Action[Any, Any, Any]] = {}
         self.dummy = dummy
         self.instruments = Instruments()
@@ -212,6 +213,7 @@ class Robot(StateMethods, EmergencyStop):
                 await self._executive.close(SHUTDOWN_REASON)
             finally:
                 self._state.bind(None)
+                self._close_workers()
                 self._unwatch_loop()
                 self._release_signals(None)
             raise
@@ -232,6 +234,7 @@ class Robot(StateMethods, EmergencyStop):
                     await self._stop()
             finally:
                 self._state.bind(None)
+                self._close_workers()
                 self._unwatch_loop()
         except BaseException as exc:
             self._release_signals(exc)
@@ -352,11 +355,23 @@ class Robot(StateMethods, EmergencyStop):
 
         For code that never awaits (a blocking driver call, a long computation),
         which on the loop would freeze every action, monitor and the simulation.
-        Cancelling the caller (its action) stops the waiting at once; the call
-        cannot be stopped and finishes in its thread: its result is dropped, and
-        an exception it raises then is logged with its traceback (logger
-        ``pyrobots_aio.robot``). It runs in the loop's default executor (no
-        thread of its own) with a copy of the caller's context.
+        It runs with a copy of the caller's context in one of the robot's own
+        threads, started on demand and reused. Cancelling the caller (its
+        action) stops the waiting at once; the call cannot be stopped (Python
+        cannot stop a thread) and finishes in its thread, abandoned: its result
+        is dropped, and an exception it raises then is logged with its
+        traceback (logger ``pyrobots_aio.robot``).
+
+        Up to ``min(32, os.cpu_count() + 4)`` calls (as many as asyncio's
+        default executor runs) run at once for callers that still wait; further
+        callers wait their turn. An abandoned call gives its turn up at once
+        and runs on beside them, so a later call never waits behind it; but
+        while 32 abandoned calls still run, a call is refused with
+        `TooManyAbandonedCalls`, which counts them. The robot's exit waits for
+        no call: it logs a WARNING naming the abandoned calls still running;
+        each of their threads ends when its call returns, and no thread is left
+        behind once they have. A call still blocked when the program ends holds
+        the process until it returns (Python waits for its thread, as for any).
 
         In lockstep virtual time the call takes no simulated time: the clock
         stands still until it returns, as for ``loop.run_in_executor``, so a
@@ -366,6 +381,8 @@ class Robot(StateMethods, EmergencyStop):
         Raises:
             EventLoopError: Called off the robot's loop.
             RobotNotRunningError: The robot is not running.
+            TooManyAbandonedCalls: 32 abandoned calls still run (give the
+                blocking calls a timeout so that they return).
 
         Example:
             >>> import asyncio, time
@@ -376,7 +393,14 @@ class Robot(StateMethods, EmergencyStop):
             0.01
         """
         loop = self._executive.check_loop("call robot.to_thread")
-        return await run_off_loop(loop, self._log_scope.logger("pyrobots_aio.robot"), fn, *args)
+        if self._workers is None:
+            self._workers = Workers(self._log_scope.logger("pyrobots_aio.robot"))
+        return await self._workers.run(loop, fn, *args)
+
+    def _close_workers(self) -> None:
+        workers, self._workers = self._workers, None
+        if workers is not None:
+            workers.close()
 
     # -- actions ----------------------------------------------------------
 
