@@ -11,8 +11,27 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 6. ``recording``, ``sim``, ``ros2``, ``testing``, ``cli`` (public API only)
 """
 
-from ._core._instrument import EventKind as EventKind
-from ._core._instrument import ExecEvent as ExecEvent
+from ._core._events import ActionAbandonment as ActionAbandonment
+from ._core._events import ActionFinished as ActionFinished
+from ._core._events import ActionPaused as ActionPaused
+from ._core._events import ActionResumed as ActionResumed
+from ._core._events import ActionSpawned as ActionSpawned
+from ._core._events import ActionStarted as ActionStarted
+from ._core._events import CancelEscalated as CancelEscalated
+from ._core._events import CancelRequested as CancelRequested
+from ._core._events import EventKind as EventKind
+from ._core._events import ExecEvent as ExecEvent
+from ._core._events import LoopBlocked as LoopBlocked
+from ._core._events import MonitorFired as MonitorFired
+from ._core._events import ResourceAcquired as ResourceAcquired
+from ._core._events import ResourceEvent as ResourceEvent
+from ._core._events import ResourcePreempted as ResourcePreempted
+from ._core._events import ResourceReleased as ResourceReleased
+from ._core._events import ResourceSkipped as ResourceSkipped
+from ._core._events import ResourceWaiting as ResourceWaiting
+from ._core._events import StateSampled as StateSampled
+from ._core._events import event_from_data as event_from_data
+from ._core._events import event_type as event_type
 from ._core._instrument import Instrument as Instrument
 from ._exceptions import ActionAbandoned as ActionAbandoned
 from ._exceptions import ActionCancelled as ActionCancelled
@@ -84,16 +103,24 @@ __version__ = "0.1.0"
 __all__ = [
     "Action",
     "ActionAbandoned",
+    "ActionAbandonment",
     "ActionCancelled",
     "ActionDefinitionError",
     "ActionError",
+    "ActionFinished",
     "ActionHandle",
     "ActionInfo",
     "ActionInterrupted",
+    "ActionPaused",
+    "ActionResumed",
     "ActionSkipped",
+    "ActionSpawned",
+    "ActionStarted",
     "ActionState",
     "Backend",
     "BoundAction",
+    "CancelEscalated",
+    "CancelRequested",
     "CompoundResource",
     "CorruptRecordingError",
     "DriveBase",
@@ -115,7 +142,9 @@ __all__ = [
     "InvalidResourceError",
     "LockUsageError",
     "LockstepError",
+    "LoopBlocked",
     "ModelLoadError",
+    "MonitorFired",
     "MotionError",
     "Outcome",
     "Pose",
@@ -125,9 +154,15 @@ __all__ = [
     "PyRobotsError",
     "RecordingError",
     "Resource",
+    "ResourceAcquired",
     "ResourceDeadlockError",
     "ResourceError",
+    "ResourceEvent",
     "ResourceManager",
+    "ResourcePreempted",
+    "ResourceReleased",
+    "ResourceSkipped",
+    "ResourceWaiting",
     "Robot",
     "RobotNotRunningError",
     "Ros2Error",
@@ -139,12 +174,15 @@ __all__ = [
     "StateMachine",
     "StateMachineError",
     "StateSample",
+    "StateSampled",
     "StateStore",
     "TooManyActions",
     "TopicTypeError",
     "UnknownFrameError",
     "UnknownStateKeyError",
     "action",
+    "event_from_data",
+    "event_type",
     "exponential",
     "lock",
     "retry",
