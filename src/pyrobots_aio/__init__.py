@@ -17,8 +17,27 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 9. ``cli`` (public API only; its ``sim-node`` runs ``sim`` over ``ros2``)
 """
 
-from ._core._instrument import EventKind as EventKind
-from ._core._instrument import ExecEvent as ExecEvent
+from ._core._events import ActionAbandonment as ActionAbandonment
+from ._core._events import ActionFinished as ActionFinished
+from ._core._events import ActionPaused as ActionPaused
+from ._core._events import ActionResumed as ActionResumed
+from ._core._events import ActionSpawned as ActionSpawned
+from ._core._events import ActionStarted as ActionStarted
+from ._core._events import CancelEscalated as CancelEscalated
+from ._core._events import CancelRequested as CancelRequested
+from ._core._events import EventKind as EventKind
+from ._core._events import ExecEvent as ExecEvent
+from ._core._events import LoopBlocked as LoopBlocked
+from ._core._events import MonitorFired as MonitorFired
+from ._core._events import ResourceAcquired as ResourceAcquired
+from ._core._events import ResourceEvent as ResourceEvent
+from ._core._events import ResourcePreempted as ResourcePreempted
+from ._core._events import ResourceReleased as ResourceReleased
+from ._core._events import ResourceSkipped as ResourceSkipped
+from ._core._events import ResourceWaiting as ResourceWaiting
+from ._core._events import StateSampled as StateSampled
+from ._core._events import event_from_data as event_from_data
+from ._core._events import event_type as event_type
 from ._core._instrument import Instrument as Instrument
 from ._exceptions import ActionAbandoned as ActionAbandoned
 from ._exceptions import ActionCancelled as ActionCancelled
@@ -92,16 +111,24 @@ __version__ = "0.1.0"
 __all__ = [
     "Action",
     "ActionAbandoned",
+    "ActionAbandonment",
     "ActionCancelled",
     "ActionDefinitionError",
     "ActionError",
+    "ActionFinished",
     "ActionHandle",
     "ActionInfo",
     "ActionInterrupted",
+    "ActionPaused",
+    "ActionResumed",
     "ActionSkipped",
+    "ActionSpawned",
+    "ActionStarted",
     "ActionState",
     "Backend",
     "BoundAction",
+    "CancelEscalated",
+    "CancelRequested",
     "CompoundResource",
     "CorruptRecordingError",
     "DriveBase",
@@ -123,7 +150,9 @@ __all__ = [
     "InvalidResourceError",
     "LockUsageError",
     "LockstepError",
+    "LoopBlocked",
     "ModelLoadError",
+    "MonitorFired",
     "MotionError",
     "Outcome",
     "Pose",
@@ -133,9 +162,15 @@ __all__ = [
     "PyRobotsError",
     "RecordingError",
     "Resource",
+    "ResourceAcquired",
     "ResourceDeadlockError",
     "ResourceError",
+    "ResourceEvent",
     "ResourceManager",
+    "ResourcePreempted",
+    "ResourceReleased",
+    "ResourceSkipped",
+    "ResourceWaiting",
     "Robot",
     "RobotNotRunningError",
     "Ros2Error",
@@ -148,6 +183,7 @@ __all__ = [
     "StateMachine",
     "StateMachineError",
     "StateSample",
+    "StateSampled",
     "StateStore",
     "TooManyAbandonedCalls",
     "TooManyActions",
@@ -155,6 +191,8 @@ __all__ = [
     "UnknownFrameError",
     "UnknownStateKeyError",
     "action",
+    "event_from_data",
+    "event_type",
     "exponential",
     "lock",
     "retry",

@@ -24,15 +24,20 @@ def test_exported_names_are_pinned() -> None:
         "Cancellation",
         "Failure",
         "JsonlRecorder",
+        "JsonlSink",
         "McapRecorder",
+        "McapSink",
         "MemoryRecorder",
+        "MemorySink",
         "Outcomes",
         "PoseTrack",
         "Recorder",
         "Recording",
         "RecordingHeader",
+        "RecordingOptions",
         "ResourceStats",
         "Series",
+        "Sink",
         "Summary",
         "format_summary",
         "load",
@@ -80,6 +85,7 @@ def test_only_the_public_api_below_is_used(package: str) -> None:
         "recording._jsonl",
         "recording._map",
         "recording._mcap",
+        "recording._memory",
         "recording._recorder",
         "recording._recording",
         "recording._summary",
@@ -92,5 +98,5 @@ def test_docstring_examples(module: str) -> None:
     mod = importlib.import_module(f"pyrobots_aio.{module}")
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS, raise_on_error=False)
     assert result.failed == 0
-    if module in {"recording._format", "recording._recorder", "cli._console"}:
+    if module in {"recording._format", "recording._memory", "recording._recorder", "cli._console"}:
         assert result.attempted > 0

@@ -64,7 +64,7 @@ from asyncio import base_events, events
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from ._instrument import EventKind, ExecEvent
+from ._events import LoopBlocked
 from ._numbers import finite
 from ._timerfd import Timer
 
@@ -382,16 +382,17 @@ class BlockWatch:
             report.location or "an unknown place",
         )
         if self._instruments:
-            data = {
-                "duration": duration,
-                "threshold": self.threshold,
-                "blocker": report.label,
-                "location": report.location,
-                "stack": report.stack,
-            }
-            self._instruments.emit(
-                ExecEvent(EventKind.LOOP_BLOCKED, probe.loop_time, report.action, report.name, data)
+            event = LoopBlocked(
+                probe.loop_time,
+                report.action,
+                report.name,
+                duration=duration,
+                threshold=self.threshold,
+                blocker=report.label,
+                location=report.location,
+                stack=report.stack,
             )
+            self._instruments.emit(event)
 
     # -- the thread's side -----------------------------------------------------
 

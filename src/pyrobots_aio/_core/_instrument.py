@@ -1,65 +1,25 @@
 """Instrumentation: every executive event, fanned out to registered instruments.
 
-Recorders (JSON Lines, MCAP) and tests plug in here. Emitting costs one truth
-test when no instrument is registered, so the hot paths guard with
-``if instruments:`` before building an event.
+Recorders (JSON Lines, MCAP) and tests plug in here; the events are the
+classes of `._events`. Emitting costs one truth test when no instrument is
+registered, so the hot paths guard with ``if instruments:`` before building an
+event.
 """
 
 from __future__ import annotations
 
-import enum
 import logging
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
+from ._events import EventKind, ExecEvent
+
 if TYPE_CHECKING:
-    from collections.abc import Iterator, Mapping
+    from collections.abc import Iterator
+
+# EventKind and ExecEvent too: modules import them from here, their home before `._events`.
+__all__ = ["EventKind", "ExecEvent", "Instrument", "Instruments"]
 
 _log = logging.getLogger("pyrobots_aio.instrument")
-
-
-class EventKind(enum.StrEnum):
-    """What happened in the executive; the value is the name used in recordings."""
-
-    ACTION_SPAWNED = "action.spawned"
-    ACTION_STARTED = "action.started"
-    ACTION_FINISHED = "action.finished"
-    CANCEL_REQUESTED = "action.cancel_requested"
-    CANCEL_ESCALATED = "action.cancel_escalated"
-    ACTION_ABANDONED = "action.abandoned"
-    ACTION_PAUSED = "action.paused"
-    ACTION_RESUMED = "action.resumed"
-    RESOURCE_WAITING = "resource.waiting"
-    RESOURCE_ACQUIRED = "resource.acquired"
-    RESOURCE_RELEASED = "resource.released"
-    RESOURCE_PREEMPTED = "resource.preempted"
-    RESOURCE_SKIPPED = "resource.skipped"
-    MONITOR_FIRED = "monitor.fired"
-    STATE_SAMPLE = "state.sample"
-    LOOP_BLOCKED = "loop.blocked"
-    """The event loop did not turn for ``block_threshold`` or more; emitted once it turns
-    again. ``action``/``name``: the blocking action, if one; ``data``: ``duration`` (real
-    seconds), ``threshold``, ``blocker``, ``location`` (``file:line``) and ``stack``."""
-
-
-@dataclass(frozen=True, slots=True)
-class ExecEvent:
-    """One executive event, stamped with the event loop's clock.
-
-    Attributes:
-        kind: What happened.
-        time: The loop time (``loop.time()``) at which it happened.
-        action: The id of the action concerned, if any.
-        name: The name of the action (or monitor, or state key) concerned.
-        data: Kind-specific details (``parent``, ``outcome``, ``reason``, ``by``,
-            ``resource``, ``value`` ...), JSON-friendly values only.
-    """
-
-    kind: EventKind
-    time: float
-    action: int | None = None
-    name: str | None = None
-    data: Mapping[str, object] = field(default_factory=dict)
 
 
 @runtime_checkable
@@ -78,6 +38,7 @@ class Instruments:
     """The instruments attached to one robot.
 
     Example:
+        >>> from pyrobots_aio import ActionStarted
         >>> hub = Instruments()
         >>> class Count:
         ...     n = 0
@@ -85,7 +46,7 @@ class Instruments:
         ...         self.n += 1
         >>> counter = Count()
         >>> hub.add(counter)
-        >>> hub.emit(ExecEvent(EventKind.ACTION_STARTED, 0.0, 1, "walk"))
+        >>> hub.emit(ActionStarted(0.0, 1, "walk"))
         >>> counter.n
         1
     """

@@ -19,7 +19,17 @@ from collections import deque
 from threading import get_ident
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from .._core._instrument import EventKind, ExecEvent, Instruments
+from .._core._events import (
+    ActionAbandonment,
+    ActionFinished,
+    ActionPaused,
+    ActionResumed,
+    ActionSpawned,
+    ActionStarted,
+    CancelEscalated,
+    CancelRequested,
+)
+from .._core._instrument import Instruments
 from .._core._logging import LogScope
 from .._core._loops import clock_of, running_here, wrong_loop
 from .._core._numbers import finite
@@ -191,7 +201,8 @@ class Executive:
         else:
             parent._children[handle] = None
         if self.instruments.items:
-            self._emit(EventKind.ACTION_SPAWNED, handle, parent=parent.id if parent else None)
+            parent_id = parent.id if parent else None
+            self.instruments.emit(ActionSpawned(loop.time(), ident, name, parent_id))
         return handle
 
     def _refusal(
@@ -217,7 +228,7 @@ class Executive:
     def started(self, handle: ActionHandle[Any]) -> None:
         """Called by the action's task when its body starts."""
         if self.instruments.items:
-            self._emit(EventKind.ACTION_STARTED, handle)
+            self.instruments.emit(ActionStarted(self.loop.time(), handle.id, handle.name))
 
     def finished(self, handle: ActionHandle[Any]) -> None:
         """Called when an action is done: drop it from the registry and its scope."""
@@ -228,13 +239,11 @@ class Executive:
         else:
             parent._children.pop(handle, None)
         if self.instruments.items:
-            error = handle._error
-            self._emit(
-                EventKind.ACTION_FINISHED,
-                handle,
-                outcome=handle.outcome.value,
-                error=repr(error) if handle.outcome is Outcome.FAILED else None,
-            )
+            outcome = handle.outcome
+            error = repr(handle._error) if outcome is Outcome.FAILED else None
+            now = self.loop.time()
+            event = ActionFinished(now, handle.id, handle.name, outcome.value, error)
+            self.instruments.emit(event)
 
     # -- cancelling -------------------------------------------------------
 
@@ -261,12 +270,9 @@ class Executive:
             node._interrupt()
             self._watch_later(node, _ESCALATE)
             if self.instruments.items:
-                self._emit(
-                    EventKind.CANCEL_REQUESTED,
-                    node,
-                    reason=reason,
-                    by=by.id if by is not None else None,
-                )
+                by_id = by.id if by is not None else None
+                now = self.loop.time()
+                self.instruments.emit(CancelRequested(now, node.id, node.name, reason, by_id))
 
     async def cancel_all(
         self, reason: str | None = None, keep: Iterable[ActionHandle[Any]] = ()
@@ -361,20 +367,17 @@ class Executive:
         by: ActionHandle[Any] | None,
     ) -> None:
         if self.instruments.items:
+            by_id, now = by.id if by is not None else None, self.loop.time()
             for node in newly:
-                self._emit(
-                    EventKind.ACTION_PAUSED,
-                    node,
-                    reason=reason,
-                    by=by.id if by is not None else None,
-                    paused=handle.id,
-                )
+                event = ActionPaused(now, node.id, node.name, reason, by_id, handle.id)
+                self.instruments.emit(event)
         run_hooks(newly, 0, "pause")
 
     def _thawed(self, handle: ActionHandle[Any], thawed: list[ActionHandle[Any]]) -> None:
         if self.instruments.items:
+            now = self.loop.time()
             for node in thawed:
-                self._emit(EventKind.ACTION_RESUMED, node, resumed=handle.id)
+                self.instruments.emit(ActionResumed(now, node.id, node.name, handle.id))
         run_hooks(thawed, 1, "resume")
 
     def unpause(self, handle: ActionHandle[Any]) -> None:
@@ -441,7 +444,8 @@ class Executive:
             handle._interrupt()
             self._watch_later(handle, _ABANDON)
             if self.instruments.items:
-                self._emit(EventKind.CANCEL_ESCALATED, handle, location=where)
+                now = self.loop.time()
+                self.instruments.emit(CancelEscalated(now, handle.id, handle.name, where))
             return
         self.log.error(
             "action %s#%d ignored cancellation for %.3g s, at %s; abandoning it (its body is "
@@ -452,7 +456,8 @@ class Executive:
             where,
         )
         if self.instruments.items:
-            self._emit(EventKind.ACTION_ABANDONED, handle, location=where)
+            now = self.loop.time()
+            self.instruments.emit(ActionAbandonment(now, handle.id, handle.name, where))
         handle._abandon(2 * self.cancel_grace)
 
     def _cut_cleanup(self, handle: ActionHandle[Any], elapsed: float, *, warn: bool) -> None:
@@ -493,9 +498,6 @@ class Executive:
     def roots(self) -> list[ActionHandle[Any]]:
         """The running actions of the root scope (started outside any action)."""
         return list(self._roots)
-
-    def _emit(self, kind: EventKind, handle: ActionHandle[Any], **data: object) -> None:
-        self.instruments.emit(ExecEvent(kind, self.loop.time(), handle.id, handle.name, data))
 
 
 def _check_options(max_actions: object, cancel_grace: object) -> None:

@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from typing import Any
 
     from pyrobots_aio import Robot
-    from pyrobots_aio.recording import Recorder, Recording
+    from pyrobots_aio.recording import Recorder, Recording, Sink
     from pyrobots_aio.sim.random_walk import WalkReport
 
     from ._console import ConsoleHandler
@@ -201,7 +201,7 @@ class _Show:
         self.handler.stream, self.handler.start = self._saved
 
 
-def _recorder(options: argparse.Namespace) -> Recorder:
+def _recorder(options: argparse.Namespace) -> Recorder[Sink]:
     metadata = {"demo": "random-walk"}
     if not options.record:
         return MemoryRecorder(metadata=metadata)
@@ -211,7 +211,7 @@ def _recorder(options: argparse.Namespace) -> Recorder:
 
 
 def _walk(
-    options: argparse.Namespace, recorder: Recorder, show: _Show, stopping: SignalStop
+    options: argparse.Namespace, recorder: Recorder[Sink], show: _Show, stopping: SignalStop
 ) -> Callable[[], Coroutine[Any, Any, WalkReport]]:
     from pyrobots_aio.sim import SimRobot
     from pyrobots_aio.sim.random_walk import random_walk

@@ -18,7 +18,15 @@ import shutil
 import time
 from typing import TYPE_CHECKING, TextIO
 
-from pyrobots_aio import EventKind
+from pyrobots_aio import (
+    ActionAbandonment,
+    ActionFinished,
+    ActionSpawned,
+    CancelEscalated,
+    CancelRequested,
+    MonitorFired,
+    ResourceSkipped,
+)
 
 from ._console import format_time
 
@@ -67,30 +75,25 @@ class EventLines:
             self._write(f"{format_time(event.time - self.start)}  {text}")
 
     def _describe(self, event: ExecEvent) -> str | None:
-        kind, data = event.kind, event.data
         me = f"{event.name}#{event.action}"
-        if kind is EventKind.ACTION_SPAWNED:
-            if event.action is not None:
-                self._names[event.action] = me
-            parent = data.get("parent")
-            where = f" under {self._label(parent)}" if isinstance(parent, int) else ""
-            return f"start    {me}{where}" if self.verbose else None
-        if kind is EventKind.ACTION_FINISHED:
-            outcome = data.get("outcome")
-            if outcome == "succeeded" and not self.verbose:
-                return None
-            error = f": {data['error']}" if data.get("error") else ""
-            return f"{outcome:<8} {me}{error}"
-        if kind is EventKind.CANCEL_REQUESTED:
-            by = data.get("by")
-            reason = f": {data['reason']}" if data.get("reason") else ""
-            return f"cancel   {me} by {self._label(by if isinstance(by, int) else None)}{reason}"
-        if kind is EventKind.RESOURCE_SKIPPED:
-            return f"skip     {me}: {data.get('busy')!r} is busy"
-        if kind is EventKind.MONITOR_FIRED:
-            return f"event    {event.name} fired"
-        if kind in (EventKind.CANCEL_ESCALATED, EventKind.ACTION_ABANDONED):
-            return f"{kind.value.partition('.')[2]:<8} {me} at {data.get('location')}"
+        match event:
+            case ActionSpawned(parent=parent):
+                if event.action is not None:
+                    self._names[event.action] = me
+                where = f" under {self._label(parent)}" if parent is not None else ""
+                return f"start    {me}{where}" if self.verbose else None
+            case ActionFinished(outcome=outcome, error=error):
+                if outcome == "succeeded" and not self.verbose:
+                    return None
+                return f"{outcome:<8} {me}{f': {error}' if error else ''}"
+            case CancelRequested(reason=reason, by=by):
+                return f"cancel   {me} by {self._label(by)}{f': {reason}' if reason else ''}"
+            case ResourceSkipped(busy=busy):
+                return f"skip     {me}: {busy!r} is busy"
+            case MonitorFired():
+                return f"event    {event.name} fired"
+            case CancelEscalated(location=where) | ActionAbandonment(location=where):
+                return f"{event.kind.value.partition('.')[2]:<8} {me} at {where}"
         return None
 
 
@@ -201,12 +204,10 @@ class Tally:
 
     def on_event(self, event: ExecEvent) -> None:
         """Count one event."""
-        kind = event.kind
-        if kind is EventKind.ACTION_SPAWNED:
+        if isinstance(event, ActionSpawned):
             self.actions += 1
-        elif kind is EventKind.ACTION_FINISHED:
-            outcome = event.data.get("outcome")
-            self.cancelled += outcome == "cancelled"
-            self.failed += outcome == "failed"
-        elif kind is EventKind.MONITOR_FIRED:
+        elif isinstance(event, ActionFinished):
+            self.cancelled += event.outcome == "cancelled"
+            self.failed += event.outcome == "failed"
+        elif isinstance(event, MonitorFired):
             self.firings += 1

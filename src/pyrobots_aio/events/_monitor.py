@@ -6,7 +6,7 @@ import contextvars
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Self
 
-from .._core._instrument import EventKind, ExecEvent
+from .._core._events import MonitorFired
 from .._exceptions import StateError
 from ..actions import current_action
 from ._callbacks import CallbackRunner, describe, settle
@@ -265,16 +265,17 @@ class EventMonitor:
 
     def _emit(self, value: Any, status: str) -> None:
         host = self._host
-        data = {
-            "monitor": self._id,
-            "var": label(self._var),
-            "condition": self.condition,
-            "value": value if isinstance(value, _JSON_SCALARS) else repr(value),
-            "callback": status,
-        }
-        host.instruments.emit(
-            ExecEvent(EventKind.MONITOR_FIRED, host.loop.time(), None, self._name, data)
+        event = MonitorFired(
+            host.loop.time(),
+            None,
+            self._name,
+            monitor=self._id,
+            var=label(self._var),
+            condition=self.condition,
+            value=value if isinstance(value, _JSON_SCALARS) else repr(value),
+            callback=status,
         )
+        host.instruments.emit(event)
 
     # -- stopping --------------------------------------------------------------------------
 

@@ -17,14 +17,26 @@ simulated robot's sensors at its control rate) and the robot's pose in
 ``map``; `load` reads JSON Lines and MCAP alike. Recorders: `JsonlRecorder`
 (built in), `McapRecorder` (the ``mcap`` extra; opens in Foxglove, on its
 well-known schemas), `MemoryRecorder` (in memory, for tests and the CLI).
+
+Each is a `Recorder` on a sink (`JsonlSink`, `McapSink`, `MemorySink`) with
+`RecordingOptions`; any object with the `Sink` methods is a sink too, and
+receives the typed events (``pyrobots_aio.ActionFinished`` ...)::
+
+    with Recorder(MySink(), RecordingOptions(state_keys=["bumper"])).attach(robot):
+        ...
 """
 
 from ._format import format_summary as format_summary
 from ._format import shown as shown
 from ._jsonl import JsonlRecorder as JsonlRecorder
+from ._jsonl import JsonlSink as JsonlSink
 from ._mcap import McapRecorder as McapRecorder
-from ._recorder import MemoryRecorder as MemoryRecorder
+from ._mcap import McapSink as McapSink
+from ._memory import MemoryRecorder as MemoryRecorder
+from ._memory import MemorySink as MemorySink
 from ._recorder import Recorder as Recorder
+from ._recorder import RecordingOptions as RecordingOptions
+from ._recorder import Sink as Sink
 from ._recording import FORMAT as FORMAT
 from ._recording import VERSION as VERSION
 from ._recording import PoseTrack as PoseTrack
@@ -48,15 +60,20 @@ __all__ = [
     "Cancellation",
     "Failure",
     "JsonlRecorder",
+    "JsonlSink",
     "McapRecorder",
+    "McapSink",
     "MemoryRecorder",
+    "MemorySink",
     "Outcomes",
     "PoseTrack",
     "Recorder",
     "Recording",
     "RecordingHeader",
+    "RecordingOptions",
     "ResourceStats",
     "Series",
+    "Sink",
     "Summary",
     "format_summary",
     "load",

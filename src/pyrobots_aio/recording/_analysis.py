@@ -9,7 +9,23 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from pyrobots_aio import EventKind
+from pyrobots_aio import (
+    ActionAbandonment,
+    ActionFinished,
+    ActionPaused,
+    ActionResumed,
+    ActionSpawned,
+    ActionStarted,
+    CancelEscalated,
+    CancelRequested,
+    MonitorFired,
+    ResourceAcquired,
+    ResourceEvent,
+    ResourcePreempted,
+    ResourceReleased,
+    ResourceWaiting,
+    StateSampled,
+)
 
 if TYPE_CHECKING:
     from pyrobots_aio import ExecEvent
@@ -98,8 +114,8 @@ class Analysis:
     spans: dict[int, Span] = field(default_factory=dict)
     holds: list[Interval] = field(default_factory=list)
     waits: list[Interval] = field(default_factory=list)
-    preemptions: list[ExecEvent] = field(default_factory=list)
-    firings: list[ExecEvent] = field(default_factory=list)
+    preemptions: list[ResourcePreempted] = field(default_factory=list)
+    firings: list[MonitorFired] = field(default_factory=list)
     peak: int = 0
     peak_time: float | None = None
     samples: int = 0
@@ -117,19 +133,6 @@ class Analysis:
         return f"{span.name}#{ident}" if span is not None else f"#{ident}"
 
 
-def _leaves(event: ExecEvent) -> list[str]:
-    leaves = event.data.get("leaves") or event.data.get("resources") or []
-    return [str(leaf) for leaf in leaves] if isinstance(leaves, list) else []
-
-
-def _int(value: object) -> int | None:
-    return value if isinstance(value, int) and not isinstance(value, bool) else None
-
-
-def _str(value: object) -> str | None:
-    return value if isinstance(value, str) else None
-
-
 def _span(found: Analysis, event: ExecEvent) -> Span:
     ident = event.action if event.action is not None else -1
     span = found.spans.get(ident)
@@ -138,74 +141,70 @@ def _span(found: Analysis, event: ExecEvent) -> Span:
     return span
 
 
+def _on_spawned(found: Analysis, event: ActionSpawned) -> None:
+    ident, parent = event.action if event.action is not None else -1, event.parent
+    span = found.spans[ident] = Span(ident, event.name or "?", parent, event.time)
+    above = found.spans.get(parent) if parent is not None else None
+    frozen = above.paused if above is not None else None
+    if frozen is not None:  # started by a frozen action: it starts frozen (no event says so)
+        span.pauses.append(Pause(event.time, frozen.reason, frozen.by, frozen.root))
+    found._running += 1
+    if found._running > found.peak:
+        found.peak, found.peak_time = found._running, event.time
+
+
 def _on_action(found: Analysis, event: ExecEvent) -> None:
-    kind = event.kind
-    if kind is EventKind.ACTION_SPAWNED:
-        ident = event.action if event.action is not None else -1
-        parent = _int(event.data.get("parent"))
-        span = found.spans[ident] = Span(ident, event.name or "?", parent, event.time)
-        above = found.spans.get(parent) if parent is not None else None
-        frozen = above.paused if above is not None else None
-        if frozen is not None:  # started by a frozen action: it starts frozen (no event says so)
-            span.pauses.append(Pause(event.time, frozen.reason, frozen.by, frozen.root))
-        found._running += 1
-        if found._running > found.peak:
-            found.peak, found.peak_time = found._running, event.time
+    if isinstance(event, ActionSpawned):
+        _on_spawned(found, event)
         return
     span = _span(found, event)
-    if kind is EventKind.ACTION_STARTED:
-        span.started = event.time
-    elif kind is EventKind.ACTION_FINISHED:
-        span.finished = event.time
-        span.outcome = _str(event.data.get("outcome")) or NOT_DONE
-        span.error = _str(event.data.get("error"))
-        span.thaw(event.time, "finished")
-        found._running -= 1
-    elif kind is EventKind.CANCEL_REQUESTED:
-        span.thaw(event.time, "cancelled")
-        if span.cancelled_at is None:
-            span.cancelled_at = event.time
-            span.reason = _str(event.data.get("reason"))
-            span.by = _int(event.data.get("by"))
-    elif kind is EventKind.ACTION_PAUSED and span.paused is None:
-        data = event.data
-        root = _int(data.get("paused"))
-        span.pauses.append(Pause(event.time, _str(data.get("reason")), _int(data.get("by")), root))
-    elif kind is EventKind.ACTION_RESUMED:
-        span.thaw(event.time, "resumed")
-    elif kind is EventKind.CANCEL_ESCALATED:
-        found.escalations += 1
-    elif kind is EventKind.ACTION_ABANDONED:
-        found.abandoned += 1
+    match event:
+        case ActionStarted():
+            span.started = event.time
+        case ActionFinished(outcome=outcome, error=error):
+            span.finished, span.outcome, span.error = event.time, outcome, error
+            span.thaw(event.time, "finished")
+            found._running -= 1
+        case CancelRequested(reason=reason, by=by):
+            span.thaw(event.time, "cancelled")
+            if span.cancelled_at is None:
+                span.cancelled_at, span.reason, span.by = event.time, reason, by
+        case ActionPaused(reason=reason, by=by, paused=root) if span.paused is None:
+            span.pauses.append(Pause(event.time, reason, by, root))
+        case ActionResumed():
+            span.thaw(event.time, "resumed")
+        case CancelEscalated():
+            found.escalations += 1
+        case ActionAbandonment():
+            found.abandoned += 1
 
 
-def _on_resource(found: Analysis, event: ExecEvent) -> None:
-    kind, ident = event.kind, event.action if event.action is not None else -1
-    name = event.name or "?"
-    priority = _int(event.data.get("priority")) or 0
-    for leaf in _leaves(event):
+def _on_resource(found: Analysis, event: ResourceEvent) -> None:
+    ident, name = event.action if event.action is not None else -1, event.name or "?"
+    time, priority = event.time, event.priority
+    for leaf in event.leaves:
         key = (ident, leaf)
-        if kind is EventKind.RESOURCE_WAITING:
-            wait = Interval(leaf, ident, name, event.time, priority=priority, outcome=NOT_DONE)
-            found._open_waits[key] = wait
-            found.waits.append(wait)
-        elif kind is EventKind.RESOURCE_ACQUIRED:
-            _close_wait(found, key, event.time, "acquired")
-            hold = Interval(leaf, ident, name, event.time, priority=priority)
-            found._open_holds[key] = hold
-            found.holds.append(hold)
-        elif kind is EventKind.RESOURCE_RELEASED:
-            if event.data.get("withdrawn"):
-                _close_wait(found, key, event.time, "withdrawn")
-            else:
+        match event:
+            case ResourceWaiting():
+                wait = Interval(leaf, ident, name, time, priority=priority, outcome=NOT_DONE)
+                found._open_waits[key] = wait
+                found.waits.append(wait)
+            case ResourceAcquired():
+                _close_wait(found, key, time, "acquired")
+                hold = Interval(leaf, ident, name, time, priority=priority)
+                found._open_holds[key] = hold
+                found.holds.append(hold)
+            case ResourceReleased(withdrawn=True):
+                _close_wait(found, key, time, "withdrawn")
+            case ResourceReleased():
                 released = found._open_holds.pop(key, None)
                 if released is not None:
-                    released.end = event.time
-    if kind is EventKind.RESOURCE_PREEMPTED:
+                    released.end = time
+    if isinstance(event, ResourcePreempted):
         found.preemptions.append(event)
         victim = found.spans.get(ident)
         if victim is not None and victim.via is None:
-            victim.via = _str(event.data.get("resource"))
+            victim.via = event.resource or None
 
 
 def _close_wait(found: Analysis, key: tuple[int, str], time: float, outcome: str) -> None:
@@ -218,15 +217,14 @@ def analyse(recording: Recording) -> Analysis:
     """Read the spans, holds, waits, preemptions and firings of ``recording``."""
     found = Analysis()
     for event in recording.events:
-        group = event.kind.value.partition(".")[0]
-        if group == "action":
-            _on_action(found, event)
-        elif group == "resource":
+        if isinstance(event, ResourceEvent):
             _on_resource(found, event)
-        elif event.kind is EventKind.MONITOR_FIRED:
+        elif isinstance(event, MonitorFired):
             found.firings.append(event)
-        elif event.kind is EventKind.STATE_SAMPLE:
+        elif isinstance(event, StateSampled):
             found.samples += 1
+        elif event.kind.value.startswith("action."):
+            _on_action(found, event)
     return found
 
 

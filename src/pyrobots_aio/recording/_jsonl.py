@@ -22,7 +22,7 @@ cannot write, is recorded as null.
 A write that fails (a full disk, a file-size limit) stops the recording, not
 the robot: one warning says so, the file is cut back to its last whole line
 (a failed write can leave half a line behind), what comes after is dropped,
-and `JsonlRecorder.close` raises `RecordingError`. The file then reads as a
+and closing (`Recorder.close`) raises `RecordingError`. The file then reads as a
 recording without its end record (``Recording.complete`` is False).
 """
 
@@ -39,13 +39,15 @@ from pyrobots_aio import EventKind, RecordingError
 from pyrobots_aio.telemetry import finite as _finite
 from pyrobots_aio.telemetry import jsonable as _jsonable
 
-from ._recorder import Recorder
+from ._recorder import Recorder, RecordingOptions
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Mapping
+    from collections.abc import Callable, Collection, Mapping
 
     from pyrobots_aio import ExecEvent
     from pyrobots_aio.telemetry import Pose2D
+
+    from ._recording import RecordingHeader
 
 _log = logging.getLogger("pyrobots_aio.recording")
 
@@ -101,46 +103,17 @@ BATCH = 64
 (events kept longer would outlive garbage-collector generations and slow every collection)."""
 
 
-class JsonlRecorder(Recorder):
-    """Records a robot's events to a JSON Lines file that `load` reads back.
+class JsonlSink:
+    """A `Sink` that writes a JSON Lines file, which `load` reads back.
 
     Args:
         path: The file to write (replaced if it exists).
-        state_keys: State keys to sample (None: every key; see `Recorder`).
-        sample_rate: None (default): every change; a number downsamples numbers
-            and the pose to at most that many samples per second.
-        pose_frame: The frame whose pose in ``map`` is recorded (None: none).
-        metadata: Free JSON-friendly facts for the header.
-        buffer_size: Events buffered before a write.
-        flush_interval: Loop seconds after which buffered events are written anyway.
-
-    Example:
-        >>> import asyncio
-        >>> from pyrobots_aio import Robot, action
-        >>> from pyrobots_aio.recording import JsonlRecorder, load
-        >>> @action
-        ... async def hello(robot: Robot) -> None:
-        ...     await robot.sleep(0.01)
-        >>> async def main(path: str) -> None:
-        ...     robot = Robot()
-        ...     with JsonlRecorder(path).attach(robot):
-        ...         async with robot:
-        ...             await hello(robot)
-        >>> asyncio.run(main("hello.jsonl"))  # doctest: +SKIP
-        >>> [e.kind.value for e in load("hello.jsonl").events]  # doctest: +SKIP
-        ['action.spawned', 'action.started', 'action.finished']
+        buffer_size: Lines buffered before a write.
+        flush_interval: Loop seconds after which buffered lines are written anyway.
     """
 
     def __init__(
-        self,
-        path: str | os.PathLike[str],
-        *,
-        state_keys: Iterable[str] | None = None,
-        sample_rate: float | None = None,
-        pose_frame: str | None = "base_link",
-        metadata: Mapping[str, object] | None = None,
-        buffer_size: int = 1000,
-        flush_interval: float = 1.0,
+        self, path: str | os.PathLike[str], *, buffer_size: int = 1000, flush_interval: float = 1.0
     ) -> None:
         if isinstance(buffer_size, bool) or not isinstance(buffer_size, int) or buffer_size < 1:
             msg = f"buffer_size must be a positive number of events, got {buffer_size!r}"
@@ -148,13 +121,11 @@ class JsonlRecorder(Recorder):
         if not flush_interval > 0:
             msg = f"flush_interval must be a positive number of seconds, got {flush_interval!r}"
             raise ValueError(msg)
-        super().__init__(
-            state_keys=state_keys, sample_rate=sample_rate, pose_frame=pose_frame, metadata=metadata
-        )
         self.path = os.fspath(path)
         self.buffer_size = buffer_size
         self.flush_interval = float(flush_interval)
         self._file: IO[str] | None = None
+        self._count = 0  # lines written after the header
         self._batch: list[ExecEvent] = []  # action events not yet encoded
         self._batch_size = min(BATCH, buffer_size)
         self._lines: list[str] = []  # encoded, not yet written
@@ -166,7 +137,19 @@ class JsonlRecorder(Recorder):
             kind: {} for kind in _BATCHED
         }
 
-    def on_event(self, event: ExecEvent) -> None:
+    def open(self, header: RecordingHeader) -> None:
+        """Create the file and write the header line."""
+        file = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 (closed in close)
+        try:
+            file.write(_encode(header.to_json()) + "\n")
+            file.flush()
+        except BaseException:
+            with contextlib.suppress(OSError):
+                file.close()
+            raise
+        self._file = file
+
+    def write_event(self, event: ExecEvent) -> None:
         """Take one event: batch it (action events) or encode it now; write when enough wait."""
         if event.kind in _BATCHED:
             batch = self._batch
@@ -178,13 +161,12 @@ class JsonlRecorder(Recorder):
             self._encode_batch()
         lines = self._lines
         lines.append(self._line(event))
-        self._last_time = event.time
         if len(lines) == 1:
-            self._first_pending(event.time)
+            self._first_pending()
         if len(lines) >= self.buffer_size:
             self._write()
 
-    def _take_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
+    def write_samples(self, time: float, values: Mapping[str, object], pose: Pose2D | None) -> None:
         """One sample line: the state values written at ``time`` and the pose."""
         if self._batch:  # keep the order of events
             self._encode_batch()
@@ -192,13 +174,12 @@ class JsonlRecorder(Recorder):
         tail = "}\n" if pose is None else f',"pose":[{pose[0]!r},{pose[1]!r},{pose[2]!r}]}}\n'
         lines = self._lines
         lines.append(f'{{"t":{time!r},"state":{state}{tail}')
-        self._last_time = time
         if len(lines) == 1:
-            self._first_pending(time)
+            self._first_pending()
         if len(lines) >= self.buffer_size:
             self._write()
 
-    def _state(self, values: dict[str, object]) -> str:
+    def _state(self, values: Mapping[str, object]) -> str:
         """``values`` as a JSON object: finite floats and booleans directly (most sensors)."""
         keys, parts = self._keys, []
         for key, value in values.items():
@@ -216,20 +197,16 @@ class JsonlRecorder(Recorder):
     def _batched(self, time: float) -> None:
         """The batch just got its first event, or is full."""
         if len(self._batch) == 1:
-            self._first_pending(time)
+            self._first_pending()
         if len(self._batch) >= self._batch_size:
             self._encode_batch()
 
-    def _first_pending(self, time: float) -> None:
-        """Something waits to be written: check the state, plan a timed flush."""
-        if self._closed or self._error is not None:
+    def _first_pending(self) -> None:
+        """Something waits to be written: drop it if the file failed, else plan a timed flush."""
+        if self._error is not None:
             self._batch.clear()
             self._lines.clear()
-            if self._closed:
-                self._dropped()
             return
-        if not self._opened:
-            self._ensure_open(time)
         if self._timer is None:
             try:
                 loop = asyncio.get_running_loop()
@@ -242,7 +219,7 @@ class JsonlRecorder(Recorder):
         self.flush()
 
     def flush(self) -> None:
-        """Write the buffered events now."""
+        """Write the buffered lines now."""
         if self._batch:
             self._encode_batch()
         self._write()
@@ -294,38 +271,27 @@ class JsonlRecorder(Recorder):
         for event in batch:
             known = ends[event.kind]
             end = known.get(event.name)
+            data = event.data
             # Equal data give the same JSON here: the executive's values are ints, strings, None.
-            if end is None or end[0] != event.data:
-                end = known[event.name] = (event.data, self._tail(event))
+            if end is None or end[0] != data:
+                end = known[event.name] = (data, _tail(event, data))
             action = "null" if event.action is None else event.action
             lines.append(f'{{"t":{event.time!r},"action":{action}{end[1]}')
-        self._last_time = batch[-1].time
         if len(lines) >= self.buffer_size:
             self._write()
 
     @staticmethod
     def _line(event: ExecEvent) -> str:
         action = "null" if event.action is None else event.action
-        return f'{{"t":{event.time!r},"action":{action}{JsonlRecorder._tail(event)}'
+        return f'{{"t":{event.time!r},"action":{action}{_tail(event, event.data)}'
 
-    @staticmethod
-    def _tail(event: ExecEvent) -> str:
-        name = _encode(event.name)
-        data = _encode_data(event.data) if event.data else "{}"
-        return f',"kind":"{event.kind}","name":{name},"data":{data}}}\n'
+    def close(self, end: float | None) -> None:
+        """Write what is buffered and the end record; close the file.
 
-    def _open(self, header: Mapping[str, Any]) -> None:
-        file = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 (closed in _finish)
-        try:
-            file.write(_encode(header) + "\n")
-            file.flush()
-        except BaseException:
-            with contextlib.suppress(OSError):
-                file.close()
-            raise
-        self._file = file
-
-    def _finish(self, end: float | None, count: int) -> None:
+        Raises:
+            RecordingError: A write failed (a full disk): the file keeps the
+                lines written before, up to its last whole line, without an end record.
+        """
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -353,9 +319,75 @@ class JsonlRecorder(Recorder):
             self._fail(exc)
 
     def __repr__(self) -> str:
-        state = "failed" if self._error else "closed" if self._closed else "open"
-        events = self._count + len(self._lines) + len(self._batch)
-        return f"<JsonlRecorder {self.path!r} {state}, {events} events>"
+        state = "failed" if self._error else "closed" if self._file is None else "open"
+        return f"<JsonlSink {self.path!r} {state}>"
+
+
+def _tail(event: ExecEvent, data: Mapping[str, object]) -> str:
+    """The end of an event's line: its kind, name and data."""
+    name = _encode(event.name)
+    encoded = _encode_data(data) if data else "{}"
+    return f',"kind":"{event.kind}","name":{name},"data":{encoded}}}\n'
+
+
+class JsonlRecorder(Recorder[JsonlSink]):
+    """Records a robot's run to a JSON Lines file (a `JsonlSink`) that `load` reads back.
+
+    Args:
+        path: The file to write (replaced if it exists).
+        state_keys: State keys to sample (None: every key; see `RecordingOptions`).
+        sample_rate: None (default): every change; a number downsamples numbers
+            and the pose to at most that many samples per second.
+        pose_frame: The frame whose pose in ``map`` is recorded (None: none).
+        metadata: Free JSON-friendly facts for the header.
+        buffer_size: Lines buffered before a write.
+        flush_interval: Loop seconds after which buffered lines are written anyway.
+
+    Example:
+        >>> import asyncio
+        >>> from pyrobots_aio import Robot, action
+        >>> from pyrobots_aio.recording import JsonlRecorder, load
+        >>> @action
+        ... async def hello(robot: Robot) -> None:
+        ...     await robot.sleep(0.01)
+        >>> async def main(path: str) -> None:
+        ...     robot = Robot()
+        ...     with JsonlRecorder(path).attach(robot):
+        ...         async with robot:
+        ...             await hello(robot)
+        >>> asyncio.run(main("hello.jsonl"))  # doctest: +SKIP
+        >>> [e.kind.value for e in load("hello.jsonl").events]  # doctest: +SKIP
+        ['action.spawned', 'action.started', 'action.finished']
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        state_keys: Collection[str] | None = None,
+        sample_rate: float | None = None,
+        pose_frame: str | None = "base_link",
+        metadata: Mapping[str, object] | None = None,
+        buffer_size: int = 1000,
+        flush_interval: float = 1.0,
+    ) -> None:
+        sink = JsonlSink(path, buffer_size=buffer_size, flush_interval=flush_interval)
+        options = RecordingOptions(state_keys, sample_rate, pose_frame, metadata or {})
+        super().__init__(sink, options)
+
+    @property
+    def path(self) -> str:
+        """The file written."""
+        return self.sink.path
+
+    @property
+    def error(self) -> OSError | None:
+        """The error that stopped the recording (a full disk), or None."""
+        return self.sink.error
+
+    def __repr__(self) -> str:
+        state = "failed" if self.error else "closed" if self.closed else "open"
+        return f"<JsonlRecorder {self.path!r} {state}, {self._count} events>"
 
 
 def _cut_to_last_line(path: str) -> None:

@@ -198,7 +198,7 @@ def marks(recording: Recording, found: Analysis) -> list[Mark]:
     for event in found.preemptions:
         victim = found.label(event.action) or "?"
         found_marks.append(
-            Mark("preempt", event.time, f"{victim} preempted for {event.data.get('resource')!r}")
+            Mark("preempt", event.time, f"{victim} preempted for {event.resource!r}")
         )
     return sorted(found_marks, key=lambda m: m.time)
 

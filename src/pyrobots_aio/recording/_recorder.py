@@ -1,30 +1,35 @@
-"""What every recorder shares: attaching to a robot, sampling its state and pose, closing.
+"""The recorder: attached to a robot, it feeds a `Sink` the run's events, state and pose.
 
 A recorder is an `Instrument`: the executive calls its ``on_event`` inline, so
-subclasses keep that path short (append to a buffer) and write in bulk. The
-base class adds what the instrumentation hook alone does not give: the header
-facts (robot class, seed, the arena's floor plan), the robot's state and pose
-sampled at each write of the state (each control tick of a simulated robot),
-and a lifecycle (``attach`` ... ``close``, or a ``with`` block).
+the path to the sink is short (a sink appends to a buffer and writes in bulk).
+The recorder adds what the instrumentation hook alone does not give: the
+header facts (robot class, seed, the arena's floor plan), the robot's state and
+pose sampled at each write of the state (each control tick of a simulated
+robot), as `RecordingOptions` say, and a lifecycle (``attach`` ... ``close``,
+or a ``with`` block). Where the run goes is the sink's business: `JsonlSink`,
+`McapSink`, `MemorySink`, or any object with the `Sink` methods.
 """
 
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import datetime
 import logging
 import math
-from typing import TYPE_CHECKING, Any, Self
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Generic, Protocol, Self, TypeVar
 
-from pyrobots_aio import ExecEvent, RecordingError
-from pyrobots_aio.telemetry import Pose2D, StateSampler
+from pyrobots_aio import RecordingError
+from pyrobots_aio.telemetry import StateSampler
 
-from ._recording import FORMAT, VERSION, Recording, RecordingHeader, SeriesBuilder
+from ._recording import RecordingHeader
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Mapping
+    from collections.abc import Collection, Mapping
 
-    from pyrobots_aio import Robot
+    from pyrobots_aio import ExecEvent, Robot
+    from pyrobots_aio.telemetry import Pose2D
 
 _log = logging.getLogger("pyrobots_aio.recording")
 
@@ -47,16 +52,14 @@ def floor_plan(robot: Robot) -> list[dict[str, Any]]:
     return list(plan()) if callable(plan) else []
 
 
-class Recorder:
-    """The base of the recorders: attach to a robot, sample its state and pose, close.
-
-    Subclasses implement ``_record(event)``, ``_record_samples(time, values, pose)``,
-    ``_open(header)`` and ``_finish(end, count)``; users call `attach`, `close`
-    or use ``with``.
+@dataclass(frozen=True, slots=True)
+class RecordingOptions:
+    """What a `Recorder` samples besides the events, and the free facts of its header.
 
     Args:
         state_keys: State keys to sample: the value after each write that
-            changes it. None (default): every key.
+            changes it. None (default): every key. Kept as a tuple; one string
+            is one key.
         sample_rate: None (default): every change is recorded, so a simulated
             robot's sensors and pose are recorded at its control rate. A number
             downsamples numbers and the pose to at most that many samples per
@@ -65,59 +68,142 @@ class Recorder:
         pose_frame: The frame whose pose in ``map`` is recorded with each state
             write, if the robot knows it (None: no pose).
         metadata: Free JSON-friendly facts to store in the header.
+
+    Raises:
+        ValueError: ``sample_rate`` is not a positive number or None.
     """
 
-    def __init__(
-        self,
-        *,
-        state_keys: Iterable[str] | None = None,
-        sample_rate: float | None = None,
-        pose_frame: str | None = "base_link",
-        metadata: Mapping[str, object] | None = None,
-    ) -> None:
-        if sample_rate is not None and not (
-            _is_number(sample_rate) and math.isfinite(sample_rate) and sample_rate > 0
-        ):
+    state_keys: Collection[str] | None = None
+    sample_rate: float | None = None
+    pose_frame: str | None = "base_link"
+    metadata: Mapping[str, object] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        rate = self.sample_rate
+        if rate is not None and not (_is_number(rate) and math.isfinite(rate) and rate > 0):
             msg = (
-                "sample_rate must be a positive number of samples per second or None, "
-                f"got {sample_rate!r}"
+                f"sample_rate must be a positive number of samples per second or None, got {rate!r}"
             )
             raise ValueError(msg)
-        keys: tuple[str, ...] | None
-        if state_keys is None:
-            keys = None
-        else:
-            keys = (state_keys,) if isinstance(state_keys, str) else tuple(state_keys)
-        self.state_keys = keys
-        self.sample_rate = sample_rate
-        self.pose_frame = pose_frame
+        keys = self.state_keys
+        if keys is not None:  # kept as a tuple; a string is one key
+            frozen = (keys,) if isinstance(keys, str) else tuple(keys)
+            object.__setattr__(self, "state_keys", frozen)
+
+    @property
+    def period(self) -> float:
+        """Least seconds between two samples of a number or the pose (0: every change)."""
         # A hair under the period, so that a write due exactly on time is not lost to rounding.
-        self._period = 0.0 if sample_rate is None else (1.0 - 1e-6) / sample_rate
-        self._header: dict[str, Any] = {
-            "format": FORMAT,
-            "version": VERSION,
-            "created": None,
-            "robot": None,
-            "seed": None,
-            "t0": None,
-            "state_keys": None if keys is None else list(keys),
-            "sample_rate": sample_rate,
-            "pose_frame": None,
-            "floor_plan": [],
-            "metadata": dict(metadata or {}),
-        }
+        return 0.0 if self.sample_rate is None else (1.0 - 1e-6) / self.sample_rate
+
+
+class Sink(Protocol):
+    """Where a `Recorder` writes a run: a file format, memory, a network.
+
+    The recorder calls `open` once, before anything else (at `Recorder.attach`,
+    or at the first event); then `write_event` and `write_samples` as the run
+    goes, from the event loop's thread; `flush` when asked; `close` once, last.
+    ``write_event`` runs inside the executive: keep it short and never block
+    (buffer, and write in bulk).
+
+    Example, a sink that keeps the events in a list::
+
+        class ListSink:
+            def __init__(self) -> None:
+                self.events: list[ExecEvent] = []
+            def open(self, header: RecordingHeader) -> None: ...
+            def write_event(self, event: ExecEvent) -> None:
+                self.events.append(event)
+            def write_samples(self, time, values, pose) -> None: ...
+            def flush(self) -> None: ...
+            def close(self, end: float | None) -> None: ...
+
+        with Recorder(ListSink()).attach(robot):
+            ...
+    """
+
+    def open(self, header: RecordingHeader) -> None:
+        """Start the output with the header facts."""
+
+    def write_event(self, event: ExecEvent) -> None:
+        """Take one executive event."""
+
+    def write_samples(self, time: float, values: Mapping[str, object], pose: Pose2D | None) -> None:
+        """Take the state ``values`` written at ``time`` (changed or due), and the pose."""
+
+    def flush(self) -> None:
+        """Write what is buffered now."""
+
+    def close(self, end: float | None) -> None:
+        """Write what is buffered and the end (the loop time at close, if known); close."""
+
+
+SinkT_co = TypeVar("SinkT_co", bound=Sink, covariant=True)
+
+
+class Recorder(Generic[SinkT_co]):
+    """Records a robot's run into ``sink``: its events, and its state and pose as ``options`` say.
+
+    Users call `attach`, `close`, or use ``with``. `JsonlRecorder`,
+    `McapRecorder` and `MemoryRecorder` are recorders on the built-in sinks.
+
+    Args:
+        sink: Where the run goes (see `Sink`).
+        options: What to sample and the header's free facts (default: every
+            state key at every change, the pose of ``base_link``).
+
+    Example:
+        >>> import asyncio
+        >>> from pyrobots_aio import ActionFinished, Robot, action
+        >>> from pyrobots_aio.recording import MemorySink, Recorder
+        >>> @action
+        ... async def hello(robot: Robot) -> None:
+        ...     await robot.sleep(0.01)
+        >>> async def main() -> list[str]:
+        ...     robot, sink = Robot(), MemorySink()
+        ...     with Recorder(sink).attach(robot):
+        ...         async with robot:
+        ...             await hello(robot)
+        ...     return [e.outcome for e in sink.events if isinstance(e, ActionFinished)]
+        >>> asyncio.run(main())
+        ['succeeded']
+    """
+
+    def __init__(self, sink: SinkT_co, options: RecordingOptions | None = None) -> None:
+        self._sink = sink
+        self.options = options if options is not None else RecordingOptions()
+        """What this recorder samples."""
+        keys = self.options.state_keys
+        self._header = RecordingHeader(
+            state_keys=None if keys is None else tuple(keys),
+            sample_rate=self.options.sample_rate,
+            metadata=dict(self.options.metadata),
+        )
         self._robot: Robot | None = None
         self._sampler = StateSampler(
             self._take_samples,
             keys=None if keys is None else frozenset(keys),
-            period=self._period,
-            pose_frame=pose_frame,
+            period=self.options.period,
+            pose_frame=self.options.pose_frame,
         )
+        self._write_event = sink.write_event
+        self._write_samples = sink.write_samples
+        self._ready = False  # opened and not closed: the sink takes what comes
         self._opened = False
         self._closed = False
         self._late = False
         self._count = 0
         self._last_time: float | None = None
+
+    @property
+    def sink(self) -> SinkT_co:
+        """Where the run goes."""
+        return self._sink
+
+    @property
+    def header(self) -> RecordingHeader:
+        """The header facts: complete once the recorder is open (attached, or a first event)."""
+        return self._header
 
     # -- lifecycle ----------------------------------------------------------
 
@@ -140,35 +226,41 @@ class Recorder:
             raise RecordingError(msg)
         self._robot = robot
         seed = getattr(robot, "seed", None)
-        known = isinstance(seed, int) and not isinstance(seed, bool)
-        self._header.update(robot=type(robot).__name__, seed=seed if known else None)
-        self._header.update(floor_plan=floor_plan(robot))
+        frame = self.options.pose_frame
+        self._header = dataclasses.replace(
+            self._header,
+            robot=type(robot).__name__,
+            seed=seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
+            floor_plan=tuple(floor_plan(robot)),
+            pose_frame=frame if frame is not None and frame in robot.poses.frames() else None,
+        )
         if not any(instrument is self for instrument in robot.instruments):
             robot.instruments.add(self)
-        frame = self.pose_frame
-        known = frame is not None and frame in robot.poses.frames()
-        self._header["pose_frame"] = self._sampler.pose_frame = frame if known else None
+        self._sampler.pose_frame = self._header.pose_frame
         self._ensure_open()
         self._sampler.start(robot)
         return self
 
     def close(self) -> None:
-        """Detach from the robot, write what is buffered and the end record, close.
+        """Detach from the robot, have the sink write what is buffered and the end, close.
 
         Closing twice does nothing. Events that arrive after closing (the robot
         still runs and the recorder was passed in ``instruments=``) are dropped
         with one warning.
+
+        Raises:
+            RecordingError: The sink could not write the recording (`JsonlSink`:
+                a full disk); the sink's message says what it kept.
         """
         if self._closed:
             return
         self._ensure_open()
-        self.flush()
-        self._closed = True
+        self._closed, self._ready = True, False
         self._sampler.stop()
         if self._robot is not None:
             self._robot.instruments.remove(self)
         now = _loop_time()
-        self._finish(now if now is not None else self._last_time, self._count)
+        self._sink.close(now if now is not None else self._last_time)
 
     @property
     def closed(self) -> bool:
@@ -183,32 +275,36 @@ class Recorder:
         self.close()
 
     def flush(self) -> None:
-        """Write what is buffered now (recorders that buffer override this)."""
+        """Have the sink write what it buffers now."""
+        if self._ready:
+            self._sink.flush()
 
-    # -- events ---------------------------------------------------------------
+    # -- what comes in --------------------------------------------------------
 
     def on_event(self, event: ExecEvent) -> None:
         """Record one executive event (called by the robot's instruments)."""
-        if self._closed:
-            self._dropped()
+        if not self._ready and not self._get_ready(event.time):
             return
-        if not self._opened:
-            self._ensure_open(event.time)
-        self._count += 1
         self._last_time = event.time
-        self._record(event)
-
-    def _dropped(self) -> None:
-        if not self._late:
-            self._late = True
-            _log.warning("%r is closed; events are no longer recorded", self)
+        self._count += 1
+        self._write_event(event)
 
     def _take_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
-        if not self._opened:
-            self._ensure_open(time)
-        self._count += 1
+        if not self._ready and not self._get_ready(time):
+            return
         self._last_time = time
-        self._record_samples(time, values, pose)
+        self._count += 1
+        self._write_samples(time, values, pose)
+
+    def _get_ready(self, time: float) -> bool:
+        """Open at the first record; after closing, drop it (with one warning)."""
+        if self._closed:
+            if not self._late:
+                self._late = True
+                _log.warning("%r is closed; events are no longer recorded", self)
+            return False
+        self._ensure_open(time)
+        return True
 
     def _ensure_open(self, first_time: float | None = None) -> None:
         if self._opened:
@@ -217,88 +313,14 @@ class Recorder:
         now = _loop_time()
         # Wall-clock date of the run, for people and tools (Foxglove); never used for timing.
         created = datetime.datetime.now(datetime.UTC)
-        self._header.update(
+        self._header = dataclasses.replace(
+            self._header,
             created=created.isoformat(timespec="milliseconds"),
             t0=now if now is not None else first_time,
         )
-        self._open(self._header)
-
-    # -- what subclasses provide -------------------------------------------------
-
-    def _open(self, header: Mapping[str, Any]) -> None:
-        """Start the output, with the header facts."""
-
-    def _record(self, event: ExecEvent) -> None:
-        raise NotImplementedError
-
-    def _record_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
-        """Record the state ``values`` written at ``time`` (changed or due) and the pose."""
-        raise NotImplementedError
-
-    def _finish(self, end: float | None, count: int) -> None:
-        """Write the end record (``end`` is the loop time at close) and close the output."""
+        self._sink.open(self._header)
+        self._ready = not self._closed
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "open"
-        return f"<{type(self).__name__} {state}, {self._count} events>"
-
-
-class MemoryRecorder(Recorder):
-    """A recorder that keeps the events in memory; `recording` returns them for replay.
-
-    Example:
-        >>> import asyncio
-        >>> from pyrobots_aio import Robot, action
-        >>> from pyrobots_aio.recording import MemoryRecorder, summarize
-        >>> @action
-        ... async def hello(robot: Robot) -> None:
-        ...     await robot.sleep(0.01)
-        >>> async def main() -> int:
-        ...     robot = Robot()
-        ...     with MemoryRecorder().attach(robot) as recorder:
-        ...         async with robot:
-        ...             await hello(robot)
-        ...     return summarize(recorder.recording()).actions
-        >>> asyncio.run(main())
-        1
-    """
-
-    def __init__(
-        self,
-        *,
-        state_keys: Iterable[str] | None = None,
-        sample_rate: float | None = None,
-        pose_frame: str | None = "base_link",
-        metadata: Mapping[str, object] | None = None,
-    ) -> None:
-        super().__init__(
-            state_keys=state_keys, sample_rate=sample_rate, pose_frame=pose_frame, metadata=metadata
-        )
-        self.events: list[ExecEvent] = []
-        self._series = SeriesBuilder()
-        self._end: float | None = None
-
-    def _record(self, event: ExecEvent) -> None:
-        self.events.append(event)
-
-    def _record_samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> None:
-        add = self._series.add
-        for key, value in values.items():
-            add(time, key, value)
-        if pose is not None:
-            self._series.add_pose(time, *pose)
-
-    def _finish(self, end: float | None, count: int) -> None:
-        self._end = end
-
-    def recording(self) -> Recording:
-        """The events so far as a `Recording` (complete once the recorder is closed)."""
-        header = RecordingHeader.from_json(self._header)
-        samples, poses = self._series.build(header.pose_frame)
-        return Recording(
-            header,
-            tuple(self.events),
-            end=self._end if self._closed else None,
-            samples=samples,
-            poses=poses,
-        )
+        return f"<{type(self).__name__} {self._sink!r} {state}, {self._count} events>"

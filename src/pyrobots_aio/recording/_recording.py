@@ -9,18 +9,20 @@ The JSON Lines format (version 2), one JSON object per line::
     {"end": 12.5, "events": 1234}
 
 ``t`` is the robot's loop time (``robot.time()``; simulation time in lockstep).
-Executive events carry a ``kind``. A sample line carries the state keys written
-at ``t`` whose values changed (``state``) and the robot's pose in the ``map``
-frame, ``[x, y, yaw]`` (``pose``, the header's ``pose_frame`` seen from
-``map``); a value holds until the key's next sample. By default every change is
-recorded (each control tick, for a simulated robot); with a ``sample_rate``
-(header) numbers and the pose are downsampled to at most that many samples a
-second, while booleans and other discrete values are still recorded on every
-change. The header's ``floor_plan`` (a simulated robot's arena: walls,
-obstacles, dock) lets replay draw the map without MuJoCo. The end record, with
-the number of lines before it, is written by ``close()``: a recording without
-it was not closed (the program crashed or is still running). Version 1 files
-(state samples as ``state.sample`` events) are read too.
+Executive events carry a ``kind``; their ``data`` is `ExecEvent.data`, read
+back by `pyrobots_aio.event_from_data` (which reads older files too). A sample
+line carries the state keys written at ``t`` whose values changed (``state``)
+and the robot's pose in the ``map`` frame, ``[x, y, yaw]`` (``pose``, the
+header's ``pose_frame`` seen from ``map``); a value holds until the key's next
+sample. By default every change is recorded (each control tick, for a simulated
+robot); with a ``sample_rate`` (header) numbers and the pose are downsampled to
+at most that many samples a second, while booleans and other discrete values
+are still recorded on every change. The header's ``floor_plan`` (a simulated
+robot's arena: walls, obstacles, dock) lets replay draw the map without MuJoCo.
+The end record, with the number of lines before it, is written by ``close()``:
+a recording without it was not closed (the program crashed or is still
+running). Version 1 files (state samples as ``state.sample`` events) are read
+too.
 
 Reading is safe on untrusted files: numbers must be finite (``NaN``,
 ``Infinity`` and ``1e400`` are refused), nesting is bounded, and the memory
@@ -36,7 +38,14 @@ from array import array
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from pyrobots_aio import CorruptRecordingError, EventKind, ExecEvent, RecordingError
+from pyrobots_aio import (
+    CorruptRecordingError,
+    EventKind,
+    ExecEvent,
+    RecordingError,
+    StateSampled,
+    event_from_data,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Generator, Iterator, Mapping, Sequence
@@ -136,6 +145,22 @@ class RecordingHeader:
     pose_frame: str | None = None
     floor_plan: tuple[Mapping[str, Any], ...] = ()
     metadata: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        """The header line's object (with ``format``), as `from_json` reads it."""
+        return {
+            "format": FORMAT,
+            "version": self.version,
+            "created": self.created,
+            "robot": self.robot,
+            "seed": self.seed,
+            "t0": self.t0,
+            "state_keys": None if self.state_keys is None else list(self.state_keys),
+            "sample_rate": self.sample_rate,
+            "pose_frame": self.pose_frame,
+            "floor_plan": list(self.floor_plan),
+            "metadata": dict(self.metadata),
+        }
 
     @classmethod
     def from_json(cls, obj: Mapping[str, Any]) -> RecordingHeader:
@@ -288,7 +313,7 @@ def event_from_json(obj: object) -> ExecEvent:
             raise _Bad(f"'data' must be an object, got {data!r}")
         ident = _optional(obj, "action", int)
         name = _optional(obj, "name", str)
-        return ExecEvent(kind, t, ident, name, data)
+        return event_from_data(kind, t, ident, name, data)
     except _Bad as bad:
         raise ValueError(str(bad)) from None
 
@@ -425,8 +450,8 @@ class _Body:
             self._sample(obj)
         else:
             event = event_from_json(obj)
-            if event.kind is EventKind.STATE_SAMPLE:  # version 1
-                self.samples.add(event.time, event.name or "?", event.data.get("value"))
+            if isinstance(event, StateSampled):  # version 1
+                self.samples.add(event.time, event.name or "?", event.value)
             else:
                 self.events.append(event)
         self.records += 1

@@ -235,7 +235,7 @@ def _resource_stats(found: Analysis, recording: Recording) -> list[ResourceStats
         waits = [w for w in found.waits if w.resource == name]
         held = held_time(holds, stop)
         longest = max(((w.end if w.end is not None else stop) - w.start for w in waits), default=0)
-        preempted = sum(1 for p in found.preemptions if p.data.get("resource") == name)
+        preempted = sum(1 for p in found.preemptions if p.resource == name)
         share = held / duration if duration > 0 else 0.0
         stats.append(ResourceStats(name, held, share, len(holds), len(waits), longest, preempted))
     return stats

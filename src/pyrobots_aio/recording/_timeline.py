@@ -428,11 +428,11 @@ def _draw_resources(canvas: _Canvas) -> None:
             canvas.parts.append(_svg.label(name, canvas.y, 1))
             canvas.y += ROW_H
         for event in found.preemptions:
-            if event.data.get("resource") == name:
+            if event.resource == name:
                 x = canvas.scale.x(event.time)
                 canvas.parts.append(
                     f'<path class="preempt" d="M{x - 5:.1f},{top:.1f} h10 l-5,7 z">'
-                    f"<title>{esc(event.data.get('reason'))}</title></path>"
+                    f"<title>{esc(event.reason)}</title></path>"
                 )
         waits = [w for w in found.waits if w.resource == name]
         if waits:

@@ -27,7 +27,14 @@ import logging
 import math
 from typing import TYPE_CHECKING, Generic, NoReturn
 
-from .._core._instrument import EventKind, ExecEvent, Instruments
+from .._core._events import (
+    ResourceAcquired,
+    ResourcePreempted,
+    ResourceReleased,
+    ResourceSkipped,
+    ResourceWaiting,
+)
+from .._core._instrument import Instruments
 from .._exceptions import ActionSkipped, LockUsageError, ResourceDeadlockError
 from . import _cycles, _loans, _rules
 from ._grant import (
@@ -262,7 +269,7 @@ class ResourceManager(Generic[OwnerT]):
             record.grants.remove(grant)
             self._sync(grant.owner, record)
         if self._instruments:
-            self._emit(EventKind.RESOURCE_RELEASED, grant)
+            self._instruments.emit(ResourceReleased(*self._held(grant)))
         if lent:
             self._give_back(grant.leaves)
         self._flush(grant.leaves)
@@ -373,7 +380,7 @@ class ResourceManager(Generic[OwnerT]):
         self._count_below(owner, 1)
         self._sync(owner, record)
         if self._instruments:
-            self._emit(EventKind.RESOURCE_WAITING, grant)
+            self._instruments.emit(ResourceWaiting(*self._held(grant)))
         future = grant._future = asyncio.get_running_loop().create_future()
         try:
             await future
@@ -400,7 +407,7 @@ class ResourceManager(Generic[OwnerT]):
             record.waiting.remove(grant)
             self._sync(grant.owner, record)
         if self._instruments:
-            self._emit(EventKind.RESOURCE_RELEASED, grant, withdrawn=True)
+            self._instruments.emit(ResourceReleased(*self._held(grant), withdrawn=True))
         self._flush(grant.leaves)
 
     def _grant(self, grant: Grant[OwnerT]) -> None:
@@ -429,7 +436,7 @@ class ResourceManager(Generic[OwnerT]):
         record.grants.append(grant)
         self._sync(owner, record)
         if self._instruments:
-            self._emit(EventKind.RESOURCE_ACQUIRED, grant)
+            self._instruments.emit(ResourceAcquired(*self._held(grant)))
         self._flush(grant.leaves)
 
     def _held_up_now(self, grant: Grant[OwnerT]) -> None:
@@ -554,8 +561,8 @@ class ResourceManager(Generic[OwnerT]):
             name = leaf.resource.name
             reason = f"preempted by {who(owner)} (priority {grant.priority}) for {name!r}"
             if self._instruments:
-                data = {"resource": name, "by": owner.id, "reason": reason}
-                self._emit(EventKind.RESOURCE_PREEMPTED, hold, **data)
+                event = ResourcePreempted(*self._held(hold), name, owner.id, reason)
+                self._instruments.emit(event)
             hold.owner.cancel(reason)
         return True
 
@@ -569,10 +576,10 @@ class ResourceManager(Generic[OwnerT]):
         if cycle is None:
             return
         if self._instruments:
-            steps = [[w.id, name, h.id] for w, name, h in cycle]
+            steps = tuple((w.id, name, h.id) for w, name, h in cycle)
             _, busy, holder_in_way = cycle[0]
-            data = {"busy": busy, "holder": holder_in_way.id, "deadlock": steps}
-            self._emit(EventKind.RESOURCE_SKIPPED, grant, **data)
+            event = ResourceSkipped(*self._held(grant), busy, holder_in_way.id, deadlock=steps)
+            self._instruments.emit(event)
         raise ResourceDeadlockError(cycle)
 
     def _waits_of(self, hold: Grant[OwnerT]) -> list[Grant[OwnerT]]:
@@ -605,10 +612,13 @@ class ResourceManager(Generic[OwnerT]):
             lender, name = loan.lender, loan.leaf.resource.name
             reason = f"suspended by {who(owner)} (priority {grant.priority}) for {name!r}"
             if self._instruments:
-                data = {"resource": name, "by": owner.id, "reason": reason, "suspended": True}
-                self._emit(EventKind.RESOURCE_PREEMPTED, loan.holds[0], **data)
+                held = self._held(loan.holds[0])
+                self._instruments.emit(
+                    ResourcePreempted(*held, name, owner.id, reason, suspended=True)
+                )
                 for hold in loan.holds:
-                    self._emit(EventKind.RESOURCE_RELEASED, hold, leaves=[name], lent_to=owner.id)
+                    lent = ResourceReleased(*self._held(hold, name), lent_to=owner.id)
+                    self._instruments.emit(lent)
             if lender not in suspended:
                 suspended.add(lender)
                 lender._suspend(reason, owner)
@@ -627,9 +637,9 @@ class ResourceManager(Generic[OwnerT]):
                 continue
             for loan, restored, lender in self._loans.give_back(leaf):
                 if restored and self._instruments:
-                    back = {"leaves": [leaf.resource.name], "given_back": True}
                     for hold in loan.holds:
-                        self._emit(EventKind.RESOURCE_ACQUIRED, hold, **back)
+                        held = self._held(hold, leaf.resource.name)
+                        self._instruments.emit(ResourceAcquired(*held, given_back=True))
                 if lender is not None:
                     lender._unsuspend()
 
@@ -637,12 +647,10 @@ class ResourceManager(Generic[OwnerT]):
         resource, holder, ahead = why if why is not None else _rules.obstacle(grant, self._below)
         queued = ahead.owner if ahead is not None else None
         if self._instruments:
-            data = {
-                "busy": resource.name,
-                "holder": holder.id if holder is not None else None,
-                "queued": queued.id if queued is not None else None,
-            }
-            self._emit(EventKind.RESOURCE_SKIPPED, grant, **data)
+            holder_id = holder.id if holder is not None else None
+            queued_id = queued.id if queued is not None else None
+            event = ResourceSkipped(*self._held(grant), resource.name, holder_id, queued_id)
+            self._instruments.emit(event)
         priority = ahead.priority if ahead is not None else None
         raise ActionSkipped(resource, holder, queued=queued, queued_priority=priority)
 
@@ -653,9 +661,10 @@ class ResourceManager(Generic[OwnerT]):
         owner.held = _names(record.grants)
         owner.awaiting = _names(record.waiting)
 
-    def _emit(self, kind: EventKind, grant: Grant[OwnerT], **data: object) -> None:
+    def _held(
+        self, grant: Grant[OwnerT], lent: str | None = None
+    ) -> tuple[float, int, str, tuple[str, ...], tuple[str, ...], int]:
+        """What every resource event about ``grant`` starts with (only ``lent``, lent or back)."""
         owner = grant.owner
-        data.setdefault("resources", list(grant.names))
-        data.setdefault("leaves", [leaf.resource.name for leaf in grant.leaves])
-        data.setdefault("priority", grant.priority)
-        self._instruments.emit(ExecEvent(kind, self._clock(), owner.id, owner.name, data))
+        leaves = (lent,) if lent is not None else tuple(leaf.resource.name for leaf in grant.leaves)
+        return self._clock(), owner.id, owner.name, grant.names, leaves, grant.priority

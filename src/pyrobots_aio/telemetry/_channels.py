@@ -30,12 +30,20 @@ import logging
 import math
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from .._core._instrument import EventKind
+from .._core._events import (
+    ActionAbandonment,
+    ActionFinished,
+    ActionSpawned,
+    CancelEscalated,
+    CancelRequested,
+    MonitorFired,
+    ResourcePreempted,
+)
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Mapping
 
-    from .._core._instrument import ExecEvent
+    from .._core._events import ExecEvent
     from ._sampling import Pose2D
 
 __all__ = [
@@ -259,7 +267,7 @@ class FoxgloveChannels:
         kind = event.kind.value
         topic = _GROUP_TOPICS.get(kind.partition(".")[0], MONITORS)
         body = {"time": event.time, "kind": kind, "action": event.action, "name": event.name}
-        body["data"] = dict(event.data)
+        body["data"] = event.data
         stamp = self.stamp(event.time)
         messages = [Message(topic, EVENT, strict_json(body), stamp)]
         line = self._notable(event)
@@ -267,34 +275,37 @@ class FoxgloveChannels:
             messages.append(self.log(event.time, line[0], "pyrobots_aio.executive", line[1]))
         return messages
 
-    def _label(self, ident: object) -> str:
-        if not isinstance(ident, int):
+    def _label(self, ident: int | None) -> str:
+        if ident is None:
             return "outside any action"
         return f"{self._names.get(ident, '?')}#{ident}"
 
     def _notable(self, event: ExecEvent) -> tuple[int, str] | None:
-        kind, data, ident = event.kind, event.data, event.action
-        if kind is EventKind.ACTION_SPAWNED and ident is not None:
+        ident = event.action
+        if isinstance(event, ActionSpawned) and ident is not None:
             self._names[ident] = event.name or "?"
             return None
         who = self._label(ident)
-        if kind is EventKind.ACTION_FINISHED:
-            self._names.pop(ident, None) if ident is not None else None
-            if data.get("outcome") == "failed":
-                return ERROR, f"{who} failed: {data.get('error')}"
-        elif kind is EventKind.CANCEL_REQUESTED:
-            return INFO, f"{who} cancelled by {self._label(data.get('by'))}: {data.get('reason')}"
-        elif kind is EventKind.RESOURCE_PREEMPTED:
-            return WARNING, f"{who} preempted for {data.get('resource')!r}"
-        elif kind is EventKind.CANCEL_ESCALATED:
-            return WARNING, f"{who} overran its cancel grace: cancelled again"
-        elif kind is EventKind.ACTION_ABANDONED:
-            return ERROR, f"{who} ignored cancellation and was abandoned"
-        elif kind is EventKind.MONITOR_FIRED:
-            return INFO, f"monitor {event.name} fired"
+        match event:
+            case ActionFinished(outcome=outcome, error=error):
+                self._names.pop(ident, None) if ident is not None else None
+                if outcome == "failed":
+                    return ERROR, f"{who} failed: {error}"
+            case CancelRequested(reason=reason, by=by):
+                return INFO, f"{who} cancelled by {self._label(by)}: {reason}"
+            case ResourcePreempted(resource=resource):
+                return WARNING, f"{who} preempted for {resource!r}"
+            case CancelEscalated():
+                return WARNING, f"{who} overran its cancel grace: cancelled again"
+            case ActionAbandonment():
+                return ERROR, f"{who} ignored cancellation and was abandoned"
+            case MonitorFired():
+                return INFO, f"monitor {event.name} fired"
         return None
 
-    def samples(self, time: float, values: dict[str, object], pose: Pose2D | None) -> list[Message]:
+    def samples(
+        self, time: float, values: Mapping[str, object], pose: Pose2D | None
+    ) -> list[Message]:
         """A state write: one message per key, and the pose and transform."""
         stamp = self.stamp(time)
         messages = [

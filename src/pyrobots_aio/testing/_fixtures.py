@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import pytest
 import pytest_asyncio
 
-from .. import EventKind, Robot
+from .. import ActionAbandonment, Robot
 from ..loops import new_virtual_loop
 from ._events import EventLog
 
@@ -166,8 +166,8 @@ async def _running_checked(
     if request.node.get_closest_marker("allow_leaks"):
         return
     abandoned = [
-        f"{event.name}#{event.action} at {event.data.get('location')}"
-        for event in log.of_kind(EventKind.ACTION_ABANDONED)
+        f"{event.name}#{event.action} at {event.location}"
+        for event in log.of_kind(ActionAbandonment)
     ]
     assert not abandoned, f"actions ignored cancellation and were abandoned: {abandoned}"
     held = robot.resources.held()

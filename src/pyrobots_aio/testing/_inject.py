@@ -14,7 +14,7 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING, Literal, Self
 
-from .. import EventKind, ExecEvent
+from .. import ActionFinished, ActionStarted, ExecEvent
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 
 _log = logging.getLogger("pyrobots_aio.testing")
 
-_BOUNDARIES = {"start": EventKind.ACTION_STARTED, "end": EventKind.ACTION_FINISHED}
+_BOUNDARIES: dict[str, type[ExecEvent]] = {"start": ActionStarted, "end": ActionFinished}
 _SIDES = {"left": (True, False), "right": (False, True), "both": (True, True)}
 
 
@@ -68,7 +68,7 @@ class Injection:
 
     def on_event(self, event: ExecEvent) -> None:
         """Count the boundaries of ``action``; at the ``nth``, write on the next iteration."""
-        if event.kind is not self._kind or event.name != self.action:
+        if type(event) is not self._kind or event.name != self.action:
             return
         self._seen += 1
         if self._seen == self.nth:
