@@ -16,7 +16,6 @@ import re
 import signal
 import subprocess
 import sys
-import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +25,7 @@ import pytest
 
 from pyrobots_aio import EventKind
 from pyrobots_aio.recording import load
+from signal_support import HANG_GUARD, wait_delivered
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -33,9 +33,6 @@ if TYPE_CHECKING:
     from pyrobots_aio.recording import Recording
 
 DEMO = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk", "--realtime"]
-HANG_GUARD = 15.0
-"""Seconds a signalled process gets to end: far more than an orderly stop takes, and less
-than the scripts' cleanup, which lasts 30 s unless a second signal cuts it short."""
 AT_ONCE = 4
 """Processes run side by side."""
 
@@ -121,7 +118,7 @@ def _signalled(
                 child.wait(timeout=wait)  # a pause, unless it ended already
             except subprocess.TimeoutExpired:
                 if sent is not None:
-                    _wait_delivered(child, sent)
+                    wait_delivered(child, sent)
                 child.send_signal(signum)
                 sent = signum
         try:
@@ -132,31 +129,6 @@ def _signalled(
             out, err = child.communicate()
             code = None
     return Run(tuple(signals), delay, gap, code, first + out, err, path)
-
-
-def _wait_delivered(child: subprocess.Popen[str], signum: signal.Signals) -> None:
-    """Wait until ``signum`` sent to ``child`` is no longer pending in the kernel.
-
-    Signals of one kind do not queue: a second one sent while the first is
-    still pending (its process not scheduled yet, on a loaded machine) merges
-    with it, and the process sees one. So a second signal is sent only once
-    the first was delivered, whatever the gap.
-    """
-    bit = 1 << (signum - 1)
-    deadline = time.monotonic() + HANG_GUARD
-    while time.monotonic() < deadline and child.poll() is None:
-        try:
-            masks = [
-                int(line.split()[1], 16)
-                for status in Path(f"/proc/{child.pid}/task").glob("*/status")
-                for line in status.read_text().splitlines()
-                if line.startswith(("SigPnd:", "ShdPnd:"))
-            ]
-        except OSError:  # it is ending
-            return
-        if not any(mask & bit for mask in masks):
-            return
-        time.sleep(0.001)
 
 
 def _many(

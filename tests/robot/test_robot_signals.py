@@ -5,11 +5,20 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
+import sys
 import threading
+from subprocess import PIPE
+from typing import TYPE_CHECKING
 
 import pytest
 
-from pyrobots_aio import Robot, action
+from pyrobots_aio import EventKind, Robot, action
+from pyrobots_aio._core import _signals
+from pyrobots_aio.recording import load
+from signal_support import HANG_GUARD, started, wait_delivered
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 def _handlers() -> tuple[object, object]:
@@ -71,7 +80,34 @@ async def test_sigterm_stops_the_robot_in_order_and_raises_system_exit_143() -> 
         await main()
     assert ended.value.code == 143
     assert cleaned == ["hold"]
+    # The program unwinds with the signals still taken (what encloses the robot, a
+    # recorder, still has to close): the next one is a second one, not Python's default.
+    assert _handlers() != before
+    [stop] = _signals._lingering
+    assert stop.received == [signal.SIGTERM]
+    async with Robot():  # a robot entered meanwhile takes them afresh
+        assert not _signals._lingering
     assert _handlers() == before
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+@pytest.mark.asyncio
+async def test_a_program_that_handles_the_cancellation_goes_on(signum: signal.Signals) -> None:
+    # asyncio.run's rule: KeyboardInterrupt only if the cancellation ended the main task.
+    async def main() -> str:
+        async with Robot():
+            try:
+                os.kill(os.getpid(), signum)
+                await asyncio.sleep(60)
+            except asyncio.CancelledError:
+                await asyncio.sleep(0.01)  # cleanup that awaits
+                return "cleaned up"
+        return "not cancelled"
+
+    before = _handlers()
+    assert await main() == "cleaned up"
+    assert _handlers() == before
+    assert asyncio.current_task().cancelling() == 0  # type: ignore[union-attr]
 
 
 def test_a_robot_off_the_main_thread_leaves_the_signals_alone() -> None:
@@ -127,3 +163,116 @@ async def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts(
 def test_handle_signals_must_be_a_bool(value: object) -> None:
     with pytest.raises(TypeError, match=r"handle_signals must be True or False, got"):
         Robot(handle_signals=value)  # type: ignore[arg-type]
+
+
+HANDLED = """
+import asyncio
+from pyrobots_aio import Robot
+
+
+async def main():
+    async with Robot():
+        print("ready", flush=True)
+        try:
+            await asyncio.sleep(3600)
+        except asyncio.CancelledError:
+            print("cleaned up", flush=True)
+    print("after the robot", flush=True)
+
+
+asyncio.run(main())
+print("asyncio.run returned", flush=True)
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+def test_a_script_that_handles_the_cancellation_ends_normally(
+    tmp_path: Path, signum: signal.Signals
+) -> None:
+    # Before: `async with Robot()` raised KeyboardInterrupt (SystemExit) anyway, and
+    # the print after the block never ran (pyRobots' own Ctrl-C test script).
+    script = tmp_path / "handled.py"
+    script.write_text(HANDLED, encoding="utf-8")
+    with started([sys.executable, str(script)], stdout=PIPE, stderr=PIPE) as child:
+        assert child.stdout is not None
+        assert child.stdout.readline() == "ready\n"
+        child.send_signal(signum)
+        out, err = child.communicate(timeout=HANG_GUARD)
+    assert (child.returncode, out) == (0, "cleaned up\nafter the robot\nasyncio.run returned\n")
+    again = "Ctrl-C" if signum == signal.SIGINT else signum.name
+    assert err == f"{signum.name}: stopping the robot ({again} again stops at once)\n"
+
+
+RECORDED = """
+import asyncio
+import sys
+
+from pyrobots_aio import Robot, action
+from pyrobots_aio.recording import JsonlRecorder
+
+PATH, POINT = sys.argv[1:]
+
+
+def at(point):
+    # Says where the program is; waits (blocked) for the parent's line if told to.
+    print(point, flush=True)
+    if point == POINT == "closing":
+        sys.stdin.readline()
+
+
+class Recorder(JsonlRecorder):
+    def close(self):
+        at("closing")  # after `async with robot` has left: the robot has stopped
+        super().close()
+
+
+@action
+async def hold(robot):
+    try:
+        await asyncio.sleep(3600)
+    except asyncio.CancelledError:
+        at("cleaning")  # the robot's exit: its actions' cleanup
+        if POINT == "cleaning":
+            await asyncio.sleep(3600)  # (a second signal cuts it short)
+        raise
+
+
+async def main():
+    robot = Robot(actions=[hold], cancel_grace=3600)
+    with Recorder(PATH).attach(robot):
+        async with robot:
+            print("ready", flush=True)
+            await robot.hold()
+
+
+asyncio.run(main())
+"""
+
+
+@pytest.mark.parametrize("point", ["cleaning", "closing"])
+def test_a_second_sigterm_during_the_shutdown_leaves_the_recording_whole(
+    tmp_path: Path, point: str
+) -> None:
+    # The README's pattern. Before: the robot gave SIGTERM back to Python's default as
+    # it left, and a second one during the recorder's close ended the process there
+    # (exit -15), the recording cut short, without its end record.
+    script, path = tmp_path / "recorded.py", tmp_path / "run.jsonl"
+    script.write_text(RECORDED, encoding="utf-8")
+    command = [sys.executable, str(script), str(path), point]
+    with started(command, stdin=PIPE, stdout=PIPE, stderr=PIPE) as child:
+        assert child.stdout is not None
+        assert child.stdout.readline() == "ready\n"
+        child.send_signal(signal.SIGTERM)
+        while (line := child.stdout.readline()) not in {f"{point}\n", ""}:
+            pass  # ("cleaning" comes before "closing")
+        assert line == f"{point}\n"
+        child.send_signal(signal.SIGTERM)  # the first was delivered: the program reacted
+        wait_delivered(child, signal.SIGTERM)
+        _, err = child.communicate("go on\n", timeout=HANG_GUARD)
+    assert child.returncode == 143, err
+    assert "SIGTERM again: stopping at once, cutting the cleanup short\n" in err
+    assert path.read_bytes().endswith(b"\n")
+    recording = load(path)
+    assert recording.complete  # its end record is there
+    [finished] = [e for e in recording.events if e.kind is EventKind.ACTION_FINISHED]
+    assert (finished.name, finished.data["outcome"]) == ("hold", "cancelled")

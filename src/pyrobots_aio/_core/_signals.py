@@ -23,7 +23,17 @@ one:
 On leaving the block after a signal, it raises `KeyboardInterrupt` (SIGINT) or
 ``SystemExit(143)`` (SIGTERM: 128 + 15, the status a shell reports for a
 process that SIGTERM ended), so that the program ends as Python's own handlers
-would end it, but after its cleanup.
+would end it, but after its cleanup. As under ``asyncio.run``, it raises only
+if the cancellation ended the block: a program that catches it, cleans up and
+leaves the block normally goes on, and gets the signals back at once.
+
+A block that raises keeps the signals while the program unwinds (the
+recorders around ``async with robot`` write their last events and end record,
+``asyncio.run`` cancels what is left): with Python's default back in place, a
+second SIGTERM would end the process in the middle of a recorder's last write.
+So the count goes on: a second signal cuts what is left of the cleanup short,
+a third gets Python's default; the event loop gives the signals back to
+Python when it closes, and a block entered meanwhile takes them afresh.
 
 Every `Robot` does this around its own ``async with`` block, unless told not to
 (``Robot(handle_signals=False)``) or the signals are taken already (by an
@@ -39,6 +49,7 @@ import functools
 import inspect
 import logging
 import signal
+import weakref
 from typing import TYPE_CHECKING, Self
 
 if TYPE_CHECKING:
@@ -51,6 +62,10 @@ CUT_PASSES = 5
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 """The signals `stop_on_signals` handles."""
+
+
+_lingering: weakref.WeakSet[SignalStop] = weakref.WeakSet()
+"""Blocks left by a raise after a signal, still holding the signals (see `SignalStop._linger`)."""
 
 
 def _runner_handler(handler: object) -> bool:
@@ -96,9 +111,12 @@ class SignalStop:
         self._task: asyncio.Task[object] | None = None
         self._previous: dict[signal.Signals, object] = {}
         self._cancels = 0
+        self._cutting: asyncio.Handle | None = None
 
     def __enter__(self) -> Self:
         loop = asyncio.get_running_loop()
+        for earlier in list(_lingering):  # a new block: a signal now is a first one again
+            earlier._restore()
         self._loop, self._task = loop, asyncio.current_task()
         for signum in SIGNALS:
             previous = signal.getsignal(signum)
@@ -136,19 +154,38 @@ class SignalStop:
         for task in asyncio.all_tasks(self._loop):
             if _started(task):
                 self._cancel(task, reason)
+        self._cutting = None
         if passes > 1:
-            self._loop.call_soon(self._cut, reason, passes - 1)
+            self._cutting = self._loop.call_soon(self._cut, reason, passes - 1)
 
     def _cancel(self, task: asyncio.Task[object] | None, reason: str) -> None:
         if task is not None and task.cancel(reason) and task is self._task:
             self._cancels += 1
 
     def _restore(self) -> None:
+        """Give the signals back to their previous handlers; stop cutting."""
+        _lingering.discard(self)
+        if self._cutting is not None:
+            self._cutting.cancel()
+            self._cutting = None
         loop, previous, self._previous = self._loop, self._previous, {}
+        if loop is None or loop.is_closed():
+            return  # the loop gave them back to Python's defaults as it closed
         for signum, handler in previous.items():
-            if loop is not None and not loop.is_closed():
-                loop.remove_signal_handler(signum)
+            loop.remove_signal_handler(signum)
             signal.signal(signum, handler)  # type: ignore[arg-type]
+
+    def _linger(self) -> None:
+        """Keep the signals after the block, until the next one or the loop's end.
+
+        The block raises after a signal, and the program unwinds: the code
+        around the block (a recorder's close) is not done yet. The loop's
+        handlers stay in place, so the next signal is a second one (`_receive`
+        cuts what is left and restores); closing the loop removes them, which
+        puts Python's defaults back.
+        """
+        if self._previous:
+            _lingering.add(self)
 
     def __exit__(
         self,
@@ -156,15 +193,19 @@ class SignalStop:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        self._restore()
         task = self._task
-        if not self.received or task is None:
+        if task is not None:
+            for _ in range(min(self._cancels, task.cancelling())):
+                task.uncancel()  # the cancellations this block requested are answered here
+        if not self.received or exc is None:
+            # No signal; or the program caught the cancellation and left the block normally:
+            # it goes on (asyncio.run's rule: a handled cancellation is no KeyboardInterrupt).
+            self._restore()
             return
-        for _ in range(min(self._cancels, task.cancelling())):
-            task.uncancel()  # the cancellations this block requested are answered here
-        if exc is not None and not isinstance(exc, asyncio.CancelledError):
+        self._linger()  # the program unwinds: what encloses the block still has cleanup to do
+        if not isinstance(exc, asyncio.CancelledError):
             return  # a failure says more than the signal: let it through
-        if isinstance(exc, asyncio.CancelledError) and task.cancelling():
+        if task is None or task.cancelling():
             return  # someone else cancelled the task too: theirs to handle
         first = self.received[0]
         if first == signal.SIGINT:
@@ -185,7 +226,9 @@ def stop_on_signals() -> SignalStop:
     robot shuts down, cleanup bounded by ``cancel_grace``), a second cuts the
     cleanup short, a third gets Python's default. Leaving the block after a
     signal raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)``
-    (SIGTERM). Signals the program handles itself are left alone.
+    (SIGTERM), unless the program caught the cancellation and left the block
+    normally; the count goes on until the event loop closes. Signals the
+    program handles itself are left alone.
 
     Example:
         >>> import asyncio

@@ -70,7 +70,11 @@ class Robot(StateMethods, EmergencyStop):
             cancels the task that entered ``async with robot`` (an orderly
             shutdown, cleanup bounded by ``cancel_grace``), a second cuts the
             cleanup short, a third gets Python's default; leaving the block then
-            raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM).
+            raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM),
+            unless the program caught the cancellation and left the block
+            normally (as under ``asyncio.run``). The count goes on while the
+            program unwinds, until the event loop closes: a second signal never
+            ends the process in the middle of a recorder's close.
             False: leave the signals alone (see `pyrobots_aio.cli.stop_on_signals`).
 
     Example:
@@ -208,14 +212,14 @@ class Robot(StateMethods, EmergencyStop):
             self._signals = SignalStop().__enter__()
         try:
             await self._start()
-        except BaseException:
+        except BaseException as exc:
             try:
                 await self._executive.close(SHUTDOWN_REASON)
             finally:
                 self._state.bind(None)
                 self._close_workers()
                 self._unwatch_loop()
-                self._release_signals(None)
+                self._release_signals(exc)
             raise
         return self
 
