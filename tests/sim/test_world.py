@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import builtins
 import math
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
@@ -567,6 +568,49 @@ def test_mujoco_missing(monkeypatch: pytest.MonkeyPatch) -> None:
         '); install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
     )
     assert isinstance(caught.value, ImportError)
+
+
+def _failing_import(monkeypatch: pytest.MonkeyPatch, error: ImportError) -> None:
+    """Make ``import mujoco`` raise ``error``."""
+    real = builtins.__import__
+
+    def fake(name: str, *args: Any, **kwargs: Any) -> Any:
+        if name == "mujoco":
+            raise error
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", fake)
+
+
+def test_ctrl_c_during_the_import_of_mujoco_stays_a_keyboard_interrupt(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # What a pybind11 module raises when Ctrl-C lands in its initialisation (seen as
+    # "MuJoCo cannot be imported ... install it" in 1 of 50 early Ctrl-Cs).
+    interrupt = KeyboardInterrupt()
+    wrapped = ImportError("initialization failed")
+    wrapped.__cause__ = interrupt
+    outer = ImportError("initialization failed")
+    outer.__cause__ = wrapped
+    _failing_import(monkeypatch, outer)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        SimWorld()
+    assert caught.value is interrupt
+
+
+def test_a_failed_initialisation_of_mujoco_is_reported_as_one(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    failed = ImportError("initialization failed")
+    failed.__cause__ = OSError("libGL.so.1: cannot open shared object file")
+    _failing_import(monkeypatch, failed)
+    with pytest.raises(SimulationUnavailableError) as caught:
+        SimWorld()
+    assert str(caught.value) == (
+        "the simulated robot needs MuJoCo, which cannot be imported (initialization failed); "
+        'install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
+    )
+    assert caught.value.__cause__ is failed
 
 
 def test_frame_planar_is_frame_transform_s_floor_plane_exactly(world: SimWorld) -> None:

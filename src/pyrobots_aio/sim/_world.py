@@ -56,6 +56,7 @@ def _import_mujoco() -> ModuleType:
     try:
         import mujoco
     except ImportError as err:
+        _raise_interrupt(err)
         raise SimulationUnavailableError(
             f"the simulated robot needs MuJoCo, which cannot be imported ({err}); "
             'install it with: pip install -e ".[sim]" in a pyrobots_aio checkout'
@@ -63,6 +64,22 @@ def _import_mujoco() -> ModuleType:
     module: ModuleType = mujoco
     _route_warnings(module)
     return module
+
+
+def _raise_interrupt(error: ImportError) -> None:
+    """Raise the `KeyboardInterrupt` behind ``error``, if any: Ctrl-C is no missing package.
+
+    MuJoCo's extension modules (pybind11) turn whatever interrupts their
+    initialisation into ``ImportError: initialization failed``, the interrupt
+    as its cause (Ctrl-C while ``SimRobot()`` is being built).
+    """
+    seen: set[int] = set()
+    cause: BaseException | None = error
+    while cause is not None and id(cause) not in seen:
+        if not isinstance(cause, Exception):  # KeyboardInterrupt, SystemExit
+            raise cause from None
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
 
 
 def _route_warnings(mujoco: ModuleType) -> None:
