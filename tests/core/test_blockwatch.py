@@ -10,10 +10,13 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
+import signal
 import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
+from subprocess import PIPE
 from typing import TYPE_CHECKING
 
 import pytest
@@ -23,6 +26,7 @@ from pyrobots_aio._core import _blockwatch
 from pyrobots_aio._core._blockwatch import Blocker, BlockWatch, RunQueue
 from pyrobots_aio._core._instrument import Instruments
 from pyrobots_aio._core._logging import LogScope
+from signal_support import HANG_GUARD, started
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -231,3 +235,68 @@ async def test_time_the_loop_waits_for_a_cpu_is_not_a_block(
         watch.stop()
     assert (watch.blocks, len(kept.events)) == ((0, 0) if queued else (1, 1))
     assert warned.warned.is_set() is not queued
+
+
+STOPPED = """
+import asyncio, logging, sys, time
+from pyrobots_aio._core import _blockwatch
+from pyrobots_aio._core._blockwatch import BlockWatch
+from pyrobots_aio._core._instrument import Instruments
+from pyrobots_aio._core._logging import LogScope
+
+logging.basicConfig(format="%(levelname)s %(message)s")
+if sys.argv[1] == "polling":
+    def no_timers(*, blocking=True):
+        raise OSError("no timerfd here")
+    _blockwatch.Timer = no_timers
+
+
+async def main():
+    loop = asyncio.get_running_loop()
+    done = asyncio.Event()
+    loop.add_reader(sys.stdin.fileno(), done.set)
+    watch = BlockWatch(loop, 0.1, LogScope().logger("pyrobots_aio.watchdog"), Instruments())
+    watch.start()
+    print("busy", flush=True)
+    while not done.is_set():
+        # Busy callbacks of 30 ms of CPU time each, never a block: stopped in the middle of
+        # one, the loop thread finishes it when the process goes on, then turns.
+        end = time.thread_time() + 0.03
+        while time.thread_time() < end:
+            pass
+        await asyncio.sleep(0)
+    watch.stop()
+    print(watch.blocks, flush=True)
+
+
+asyncio.run(main())
+"""
+
+
+def _state(pid: int) -> str:
+    """The process's state letter (``T``: stopped), from ``/proc/<pid>/stat``."""
+    stat = Path(f"/proc/{pid}/stat").read_text()
+    return stat[stat.rindex(")") + 2]
+
+
+def test_a_process_that_was_stopped_is_not_reported_as_blocked(tmp_path: Path, mode: str) -> None:
+    # SIGSTOP, 0.6 s, SIGCONT: the clock jumps, and both threads go on at once; the
+    # watchdog's deadline expired meanwhile. It used to blame the callback the loop
+    # was in ("a callback blocks it at <file:line>").
+    script = tmp_path / "stopped.py"
+    script.write_text(STOPPED, encoding="utf-8")
+    with started(
+        [sys.executable, str(script), mode], stdin=PIPE, stdout=PIPE, stderr=PIPE
+    ) as child:
+        assert child.stdout is not None
+        assert child.stdout.readline() == "busy\n"
+        for _ in range(3):
+            time.sleep(0.3)  # busy a while
+            child.send_signal(signal.SIGSTOP)
+            deadline = time.monotonic() + HANG_GUARD
+            while _state(child.pid) != "T" and time.monotonic() < deadline:
+                time.sleep(0.001)
+            time.sleep(0.6)  # stopped
+            child.send_signal(signal.SIGCONT)
+        out, err = child.communicate("done\n", timeout=HANG_GUARD)
+    assert (child.returncode, out, err) == (0, "0\n", "")

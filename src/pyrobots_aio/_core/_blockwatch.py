@@ -30,6 +30,14 @@ How it watches, without costing the loop (Linux):
   the WARNING, and waits (on a callback it posts) for the loop to turn: one
   report per block, however long it lasts.
 
+A process that stands still as a whole (``SIGSTOP`` then ``SIGCONT``, a
+paused virtual machine) is not blocked either, though the clock jumps ahead
+meanwhile: the thread tells it by waking late, not for want of a CPU, while
+the loop thread did not run either (see `BlockWatch._stood_still`), and then
+watches afresh. A callback that blocks does not make the thread late (one
+that sleeps leaves the CPU and the GIL to it), or runs meanwhile (one that
+holds the GIL the thread needs to wake).
+
 So a block is reported between ``threshold`` and ``1.5 * threshold`` after it
 began (plus the thread's wake-up latency); blocks shorter than ``threshold``
 are not reported. An idle loop wakes ``2 / threshold`` times a second for its
@@ -81,6 +89,9 @@ IDLE_SHARE = 0.2
 """A loop busy less than this share of the time between two beats stops beating (Linux)."""
 MIN_BLOCK_THRESHOLD = 0.01
 """The smallest threshold: the thread looks twice per threshold, so less would cost CPU."""
+STILL_SHARE = 0.1
+"""A share of the threshold: the thread woke this much late, and the loop thread ran as
+little meanwhile, if the process stood still (see `BlockWatch._stood_still`)."""
 JOIN_BOUND = 5.0
 """Seconds `BlockWatch.stop` waits for the thread (only a stuck log handler could need it)."""
 
@@ -271,6 +282,7 @@ class BlockWatch:
         self._beat_cpu = 0.0
         self._beat_queued: float | None = None
         self._queue = RunQueue(None)  # opened by start(), closed by stop()
+        self._own_queue = RunQueue(None)  # the thread's own: opened and closed by it
         self._beating = False  # the loop's side (while it is busy) or the thread's looks
         try:  # the loop thread's CPU clock, for the thread to tell an idle loop from a busy one
             self._loop_clock: int | None = time.pthread_getcpuclockid(self._loop_thread)
@@ -397,6 +409,7 @@ class BlockWatch:
     # -- the thread's side -----------------------------------------------------
 
     def _watch(self) -> None:
+        self._own_queue = RunQueue(threading.get_native_id())
         try:
             if self._deadline is None:
                 self._poll()
@@ -404,10 +417,14 @@ class BlockWatch:
                 self._wait_on(self._deadline)
         except Exception:  # a bug here must not pass silently
             self._log.exception("the loop watchdog failed; the loop is no longer watched")
+        finally:
+            self._own_queue.close()
 
     def _wait_on(self, deadline: Timer) -> None:
         """Sleep until the loop misses its beat by ``threshold``; report it then (Linux)."""
+        afresh = 0.0  # when the process last came back from standing still
         while True:
+            before = self._own_queue.waited()
             deadline.wait()  # in the kernel, without the GIL
             if self._stopping:
                 return
@@ -416,7 +433,12 @@ class BlockWatch:
                 if not self._look_at_idle(deadline):
                     return
                 continue
-            due = self._beat_at + self._period  # when the beat the loop missed fell due
+            if self._stood_still(
+                deadline.expires, before, self._beat_at, self._beat_cpu, self._beat_queued
+            ):
+                afresh = time.monotonic()
+            # When the beat the loop missed fell due (or the watch began afresh).
+            due = max(self._beat_at + self._period, afresh)
             queued = _waited(self._queue.waited(), self._beat_queued)
             rest = due + self.threshold + queued - time.monotonic()
             if rest > 0:  # it beat meanwhile, or its thread waited for a CPU: wait the rest
@@ -493,16 +515,42 @@ class BlockWatch:
         """Wait for the loop's answer for ``threshold``, not counting its waits for a CPU.
 
         False: no answer though the loop thread could run (or slept) for
-        ``threshold`` since the probe was posted.
+        ``threshold`` since the probe was posted. Time the whole process stood
+        still does not count either: the wait begins afresh after it.
         """
-        start = self._queue.waited()
+        since, cpu, start = probe.posted, self._loop_cpu(), self._queue.waited()
         budget = self.threshold
-        while not self._wait_for(probe, budget):
+        while True:
+            before, until = self._own_queue.waited(), time.monotonic() + budget
+            if self._wait_for(probe, budget):
+                return True
+            if self._stood_still(until, before, since, cpu, start):
+                since, cpu, start = time.monotonic(), self._loop_cpu(), self._queue.waited()
             queued = _waited(self._queue.waited(), start)
-            budget = probe.posted + self.threshold + queued - time.monotonic()
+            budget = since + self.threshold + queued - time.monotonic()
             if budget <= 0:
                 return False
-        return True
+
+    def _stood_still(
+        self, due: float, before: float | None, since: float, cpu: float, queued: float | None
+    ) -> bool:
+        """Whether the whole process stood still (stopped, its virtual machine paused).
+
+        The thread, whose wait for a CPU was ``before`` when it began to wait,
+        woke late after ``due``, and not for want of a CPU; and the loop
+        thread, since ``since`` (when its CPU time was ``cpu`` and its wait
+        for a CPU ``queued``), neither ran nor waited for a CPU for a while
+        either: nothing of the process ran. A callback that blocks the loop
+        does not make the thread late if it sleeps (the thread has the CPU and
+        the GIL), and runs meanwhile if it holds the GIL.
+        """
+        if self._loop_clock is None:  # the loop's CPU time is unknown: it cannot tell
+            return False
+        now, still = time.monotonic(), STILL_SHARE * self.threshold
+        if now - due - _waited(self._own_queue.waited(), before) <= still:
+            return False
+        idle = now - since - (self._loop_cpu() - cpu) - _waited(self._queue.waited(), queued)
+        return idle > still
 
     def _turning(self) -> bool:
         """Whether the loop thread is outside any callback now (waiting, or between them)."""

@@ -80,7 +80,7 @@ class Timer:
         >>> timer.close()
     """
 
-    __slots__ = ("_spec", "fd")
+    __slots__ = ("_spec", "expires", "fd")
 
     def __init__(self, *, blocking: bool = True) -> None:
         if _LIBC is None:
@@ -93,6 +93,8 @@ class Timer:
             raise OSError(errno, os.strerror(errno))
         self.fd = fd
         self._spec = _TimerSpec()
+        self.expires = float("inf")
+        """When it was last armed to expire (``time.monotonic``; inf: disarmed)."""
 
     def arm(self, seconds: float, period: float = 0.0) -> None:
         """Expire ``seconds`` from now (then every ``period`` seconds, if not 0).
@@ -100,10 +102,12 @@ class Timer:
         Re-arming forgets an expiry not read yet. ``seconds`` must be more than 0.
         """
         self._set(max(seconds, 1e-9), period)  # 0 would disarm it
+        self.expires = time.monotonic() + seconds
 
     def disarm(self) -> None:
         """Stop it: it expires no more until armed again."""
         self._set(0.0, 0.0)
+        self.expires = float("inf")
 
     def _set(self, value: float, interval: float) -> None:
         spec = self._spec
