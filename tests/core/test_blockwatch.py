@@ -32,6 +32,9 @@ if TYPE_CHECKING:
     from collections.abc import Iterator
 
 BOUND = 60.0
+LOADED = 0.1
+"""The default threshold: a loaded machine (a virtual one above all) stalls a process for
+tens of milliseconds now and then, which a smaller one would report."""
 
 
 class Kept:
@@ -85,16 +88,16 @@ def _watch(threshold: float, blocker: object = None) -> tuple[BlockWatch, Kept]:
 @pytest.mark.asyncio
 async def test_an_idle_loop_is_not_probed(mode: str) -> None:
     descriptors = set(os.listdir("/proc/self/fd"))
-    watch, kept = _watch(0.02)
+    watch, kept = _watch(LOADED)
     watch.start()
     try:
-        await asyncio.sleep(0.5)  # polling: 25 looks at a loop waiting in its selector
+        await asyncio.sleep(0.5)  # polling: 10 looks at a loop waiting in its selector
     finally:
         watch.stop()
     assert watch.probes <= 1  # (one could catch the loop in the callback that wakes it)
     if mode == "timers":  # an idle loop stops beating at once; the thread looks instead
         assert watch.beats <= 2
-        assert watch.wakes >= 10
+        assert watch.wakes >= 3  # (about 10; a loaded machine wakes a sleeping thread late)
     assert (watch.blocks, kept.events) == (0, [])
     assert set(os.listdir("/proc/self/fd")) == descriptors  # its timers are closed
 
@@ -109,33 +112,36 @@ async def _busy(seconds: float) -> None:
 
 @pytest.mark.asyncio
 async def test_a_busy_loop_that_turns_does_not_wake_the_thread(mode: str) -> None:
-    watch, kept = _watch(0.02)
+    watch, kept = _watch(LOADED)
     watch.start()
     try:
-        await _busy(0.5)
+        await _busy(1.0)
     finally:
         watch.stop()
     assert (watch.blocks, kept.events) == (0, [])
-    if mode == "timers":  # polling looks 25 times and probes most; timers: the loop beats
+    if mode == "timers":  # polling looks 20 times and probes most; timers: the loop beats
         assert watch.beats >= 10
-        assert watch.wakes <= 2
+        # The loop carries the watch: the thread wakes only where the loop stalled (none on
+        # an unloaded machine; on a loaded one, a virtual machine's CPU taken away for a
+        # while looks like idling). The thread's CPU cost is the bench's figure.
+        assert watch.wakes * 4 <= watch.beats
 
 
 @pytest.mark.asyncio
 async def test_a_loop_busy_after_idling_beats_again(mode: str) -> None:
-    watch, kept = _watch(0.02)
+    watch, kept = _watch(LOADED)
     watch.start()
     try:
         await asyncio.sleep(0.3)  # idle: the beat stops, the thread looks
         idle_beats, idle_wakes = watch.beats, watch.wakes
-        await _busy(0.5)  # busy: one look sees it (its CPU time), and it beats again
+        await _busy(1.0)  # busy: one look sees it (its CPU time), and it beats again
     finally:
         watch.stop()
     assert (watch.blocks, kept.events) == (0, [])
     if mode == "timers":
         assert idle_beats <= 2
         assert watch.beats - idle_beats >= 10
-        assert watch.wakes - idle_wakes <= 3  # (a loaded machine: a wake or two more)
+        assert (watch.wakes - idle_wakes) * 4 <= watch.beats - idle_beats
 
 
 @pytest.mark.asyncio

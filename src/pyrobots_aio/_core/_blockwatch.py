@@ -361,8 +361,9 @@ class BlockWatch:
         beat.wait()  # the expiries so far (none if it was read already)
         self.beats += 1
         now, cpu = time.monotonic(), time.thread_time()  # (this is the loop's thread)
-        busy = (cpu - self._beat_cpu) / max(now - self._beat_at, 1e-9)
-        self._beat_queued = self._queue.waited()
+        queued = self._queue.waited()
+        busy = _share(cpu - self._beat_cpu, now - self._beat_at, _waited(queued, self._beat_queued))
+        self._beat_queued = queued
         self._beat_cpu, self._beat_at = cpu, now
         if busy < IDLE_SHARE:  # the thread looks from now on, the first time in half a threshold
             self._beating = False
@@ -457,9 +458,9 @@ class BlockWatch:
         callback: probe it as polling does, and have it beat again (it is
         busy) when it answers.
         """
-        now, cpu = time.monotonic(), self._loop_cpu()
-        busy = (cpu - self._beat_cpu) / max(now - self._beat_at, 1e-9)
-        self._beat_cpu, self._beat_at = cpu, now
+        now, cpu, queued = time.monotonic(), self._loop_cpu(), self._queue.waited()
+        busy = _share(cpu - self._beat_cpu, now - self._beat_at, _waited(queued, self._beat_queued))
+        self._beat_cpu, self._beat_at, self._beat_queued = cpu, now, queued
         # A busy loop lets the GIL go only at its selects, where this thread gets it and
         # finds it "turning": its CPU time tells it is busy (and must beat again).
         if busy < IDLE_SHARE and self._turning():
@@ -610,6 +611,15 @@ class BlockWatch:
             location,
             "".join(traceback.format_list(stack)),
         )
+
+
+def _share(cpu: float, elapsed: float, queued: float) -> float:
+    """The share of ``elapsed`` a thread ran (``cpu``), its waits for a CPU left out.
+
+    A busy loop on a loaded machine waits for a CPU between its turns: that is
+    not idling, and must not stop its beat.
+    """
+    return cpu / max(elapsed - queued, 1e-9)
 
 
 def _waited(now: float | None, then: float | None) -> float:
