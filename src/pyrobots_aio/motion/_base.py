@@ -57,7 +57,7 @@ DOCK_APPROACH = (0.45, 0.0, 0.0, "dock")
 """Where `DriveBase.dock` goes before reversing onto the dock (in the dock's frame)."""
 UNDOCK_DISTANCE = 0.35
 """Metres `DriveBase.undock` drives straight ahead, off the dock."""
-_SEAM = (  # DriveBackend's members, looked up on the class (not run, as isinstance would)
+_SEAM = (  # DriveBackend's members: named in the error when missing (isinstance only says no)
     "start",
     "stop",
     "sensors",
@@ -111,7 +111,7 @@ class DriveBase(Robot):
     def __init__(
         self, *, backend: DriveBackend, stall_timeout: float = STALL_TIMEOUT, **options: Any
     ) -> None:
-        missing = [name for name in _SEAM if not hasattr(type(backend), name)]
+        missing = [name for name in _SEAM if not hasattr(backend, name)]
         if missing:
             msg = (
                 f"a DriveBase needs a DriveBackend; {backend!r} lacks {', '.join(missing)} "
