@@ -10,7 +10,8 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
    live view: below the robot, which owns a live view; it reads the robot
    through a protocol of its own, `telemetry.TelemetrySource`)
 5. ``robot`` (the composition root)
-6. ``motion`` (`DriveBase`: the motion actions, over any base), ``supervision``
+6. ``motion`` (`DriveBase`: the motion actions, over any base's `DriveBackend`;
+   the sensor table), ``supervision``
    (retry, timeout, health monitor, state machine)
 7. ``recording``, ``sim``, ``testing`` (public API only)
 8. ``ros2`` (public API only)
@@ -86,6 +87,7 @@ from .actions import action as action
 from .actions import lock as lock
 from .events import EventManager as EventManager
 from .events import EventMonitor as EventMonitor
+from .motion import DriveBackend as DriveBackend
 from .motion import DriveBase as DriveBase
 from .poses import FrameProvider as FrameProvider
 from .poses import FrameTree as FrameTree
@@ -131,6 +133,7 @@ __all__ = [
     "CancelRequested",
     "CompoundResource",
     "CorruptRecordingError",
+    "DriveBackend",
     "DriveBase",
     "EmergencyStopError",
     "EventKind",

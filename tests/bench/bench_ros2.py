@@ -263,12 +263,14 @@ async def _publish_to_wire() -> dict[str, float]:
 async def _drive_to_wire() -> dict[str, float]:
     from geometry_msgs.msg import Twist
 
+    from pyrobots_aio.motion import SENSORS
     from pyrobots_aio.ros2 import Ros2Robot
 
     receiver = _start("twists")
     plain = _Plain("bench_plain_twist")
     plain_pub = plain.node.create_publisher(Twist, "/bench/plain/cmd_vel", 1000)
-    robot = Ros2Robot(namespace="/bench/bridge", ir_sensors=(), cliff_sensors=())
+    flags = [s for s in SENSORS if s.key in ("bumper", "bumper_left", "bumper_right", "docked")]
+    robot = Ros2Robot(namespace="/bench/bridge", sensors=flags)
     sent: dict[str, dict[int, int]] = {"bridge": {}, "plain": {}}
 
     def plain_drive(v: float) -> None:

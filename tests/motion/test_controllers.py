@@ -63,12 +63,21 @@ async def test_cancel_ends_every_wait_and_a_cancelled_wait_leaves() -> None:
     assert len(controllers) == 0
 
 
-def test_a_base_must_provide_the_seam() -> None:
-    class Half(DriveBase):
-        def _set_velocity(self, v: float, w: float) -> None:
+def test_a_base_must_be_given_a_whole_drive_backend() -> None:
+    class Half:
+        def set_velocity(self, v: float, w: float) -> None:
             pass
 
-    with pytest.raises(TypeError, match="abstract") as caught:
-        Half()  # type: ignore[abstract]
-    for name in ("control", "control_period", "odom_pose"):
-        assert name in str(caught.value)
+        async def start(self, robot: object) -> None:
+            pass
+
+        async def stop(self) -> None:
+            pass
+
+    with pytest.raises(TypeError) as caught:
+        DriveBase(backend=Half())  # type: ignore[arg-type]
+    assert str(caught.value).startswith("a DriveBase needs a DriveBackend; <")
+    assert str(caught.value).endswith(
+        " lacks sensors, frames, control_period, odom_pose, map_pose, control "
+        "(see pyrobots_aio.motion.DriveBackend)"
+    )

@@ -16,7 +16,7 @@ from std_srvs.srv import Trigger  # noqa: E402
 from test_msgs.action import Fibonacci  # noqa: E402
 
 from pyrobots_aio import PyRobotsError, Robot, Ros2Error, Ros2NameError, TopicTypeError  # noqa: E402
-from pyrobots_aio.ros2 import Ros2Node, attach_ros2  # noqa: E402
+from pyrobots_aio.ros2 import Ros2Node, Ros2Robot, attach_ros2  # noqa: E402
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -42,8 +42,7 @@ def test_a_namespace_ros2_rejects_is_refused_with_its_reason() -> None:
         "ROS 2 rejects the namespace '/robot 1': Invalid namespace: namespace must not contain "
         "characters other than alphanumerics, '_', or '/':\n  '/robot 1'\n         ^"
     )
-    assert "ros2" not in vars(robot)  # nothing attached
-    assert robot.backend is None
+    assert robot.extensions == {}  # nothing attached
 
 
 def test_a_relative_namespace_is_made_absolute_as_rclpy_does() -> None:
@@ -53,8 +52,17 @@ def test_a_relative_namespace_is_made_absolute_as_rclpy_does() -> None:
 
 def test_attaching_twice_or_to_a_running_robot_is_refused() -> None:
     robot = Robot()
-    attach_ros2(robot, "first")
+    node = attach_ros2(robot, "first")
+    assert robot.extensions == {"ros2": node}  # the robot's extension, not an attribute set on it
+    assert robot.ros2 is node
+    assert "ros2" not in vars(robot)
     with pytest.raises(PyRobotsError, match=r"has a ROS 2 node already: <Ros2Node /first stopped>"):
+        attach_ros2(robot, "second")
+
+
+def test_a_ros2_robot_has_its_node_already() -> None:
+    robot = Ros2Robot(name="base")
+    with pytest.raises(PyRobotsError, match=r"has a ROS 2 node already: <Ros2Node /base stopped>"):
         attach_ros2(robot, "second")
 
 

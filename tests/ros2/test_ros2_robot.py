@@ -21,6 +21,7 @@ from nav_msgs.msg import Odometry  # noqa: E402
 from std_msgs.msg import Bool  # noqa: E402
 
 from pyrobots_aio import MotionError, Ros2Error, Ros2NameError  # noqa: E402
+from pyrobots_aio.motion import SENSORS  # noqa: E402
 from pyrobots_aio.ros2 import Ros2Robot  # noqa: E402
 
 if TYPE_CHECKING:
@@ -59,7 +60,8 @@ class Driver:
 
 def bare(namespace: str, **options: Any) -> Ros2Robot:
     """A `Ros2Robot` with no IR and no cliff sensors (the plain driver has none)."""
-    return Ros2Robot(namespace=namespace, ir_sensors=(), cliff_sensors=(), **options)
+    flags = [sensor for sensor in SENSORS if sensor.key in FLAGS]
+    return Ros2Robot(namespace=namespace, sensors=flags, **options)
 
 
 @pytest.mark.asyncio
@@ -174,9 +176,28 @@ async def test_a_robot_whose_topics_stay_silent_says_which_and_leaves_nothing_be
             ValueError,
             "dock must be a planar pose (x, y, yaw) of finite numbers, got (0.0, nan, 0.0)",
         ),
-        ({"ir_sensors": [""]}, ValueError, "a sensor's state key must be a non-empty string"),
+        (
+            {"sensors": ["ir_left"]},
+            TypeError,
+            "sensors must be Sensor records (pyrobots_aio.motion.Sensor), got 'ir_left'",
+        ),
+        (
+            {"profile": "create2"},
+            ValueError,
+            "unknown ROS 2 profile 'create2'; known profiles: ['standard']",
+        ),
     ],
-    ids=["namespace", "name", "topic", "role", "timeout", "odom_in_map", "dock", "sensor"],
+    ids=[
+        "namespace",
+        "name",
+        "topic",
+        "role",
+        "timeout",
+        "odom_in_map",
+        "dock",
+        "sensor",
+        "profile",
+    ],
 )
 def test_bad_options_are_refused_with_the_reason(
     options: dict[str, Any], error: type[Exception], message: str

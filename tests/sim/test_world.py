@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from pyrobots_aio import ModelLoadError, SimulationUnavailableError, UnknownFrameError
+from pyrobots_aio.motion import SENSORS
 from pyrobots_aio.sim._models import model_path, models_dir
 from pyrobots_aio.sim._world import SimWorld
 
@@ -84,6 +85,15 @@ def test_read_sensors_has_exactly_the_state_keys() -> None:
     bools = ["bumper", "bumper_left", "bumper_right", *CLIFF_KEYS, "docked"]
     assert all(type(state[key]) is bool for key in bools)
     assert all(type(state[key]) is float for key in state if key not in bools)
+
+
+def test_the_model_s_sensors_are_the_standard_table(world: SimWorld) -> None:
+    # The shipped model and pyrobots_aio.motion.SENSORS (which FakeBase and the ROS 2
+    # profiles read) list the same sensors: keys, kinds, order, IR reach and bearings.
+    model, table = world.sensors, SENSORS
+    assert [(s.key, s.kind, s.reach) for s in model] == [(s.key, s.kind, s.reach) for s in table]
+    assert [s.bearing for s in model] == pytest.approx([s.bearing for s in table], abs=1e-4)
+    assert [s.key for s in model] == list(world.state_keys[: len(model)])
 
 
 def test_starts_docked_at_rest_facing_away_from_the_dock(world: SimWorld) -> None:

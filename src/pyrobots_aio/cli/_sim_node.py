@@ -2,11 +2,13 @@
 
 A `SimRobot` (real time, or ``--rate`` times faster) with a ROS 2 node
 (`pyrobots_aio.ros2.attach_ros2`) that publishes its sensors every control
-tick and drives it from ``cmd_vel``; any ROS 2 tool sees it, and a robot in
-another process (or on another machine) can drive it. Topic names are
-relative, so ``--namespace /robot1`` puts them under ``/robot1``; several
-nodes run side by side under different namespaces. Ctrl-C (SIGINT) or
-SIGTERM stops it cleanly (exit code 0).
+tick and drives it from ``cmd_vel``, through a ROS 2 profile
+(``--profile``, `pyrobots_aio.ros2.Profile`: the table `Ros2Robot` reads
+through too); any ROS 2 tool sees it, and a robot in another process (or
+on another machine) can drive it. Topic names are relative, so
+``--namespace /robot1`` puts them under ``/robot1``; several nodes run side
+by side under different namespaces. Ctrl-C (SIGINT) or SIGTERM stops it
+cleanly (exit code 0). The ``standard`` profile's topics:
 
 ============================  ============================  =========================
 topic                         type                          QoS
@@ -43,15 +45,18 @@ import argparse
 import asyncio
 import math
 import signal
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from pyrobots_aio.loops import run_scaled
+from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
-    from pyrobots_aio.ros2 import Ros2Node
+    from pyrobots_aio.ros2 import Profile, Ros2Node, Ros2Publisher, Topic
     from pyrobots_aio.sim import SimRobot
+
+V = TypeVar("V")
 
 
 def positive(text: str) -> float:
@@ -102,38 +107,59 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="stop the wheels when no cmd_vel came for this long (default: 0.5)",
     )
     node.add_argument("--seed", type=int, default=0, help="seeds the IR noise (default: 0)")
+    node.add_argument(
+        "--profile",
+        choices=sorted(PROFILES),
+        default=STANDARD.name,
+        help="the ROS 2 topics, types and conversions, as Ros2Robot(profile=...) takes them "
+        "(default: standard)",
+    )
     node.set_defaults(command=run_sim_node)
 
 
 class SimNode:
-    """The ROS 2 face of a running simulated robot: sensors out every tick, ``cmd_vel`` in."""
+    """The ROS 2 face of a running simulated robot: a profile's topics out each tick, command in.
 
-    def __init__(self, robot: SimRobot, ros2: Ros2Node, *, sim_clock: bool, cmd_timeout: float):
+    Args:
+        robot: The running simulated robot.
+        ros2: Its node.
+        profile: The topics, types and conversions (those `Ros2Robot` reads).
+        sim_clock: Stamp with the simulation's clock and publish ``/clock``.
+        cmd_timeout: Seconds a command holds before the wheels stop.
+    """
+
+    def __init__(
+        self,
+        robot: SimRobot,
+        ros2: Ros2Node,
+        *,
+        profile: Profile,
+        sim_clock: bool,
+        cmd_timeout: float,
+    ):
         from builtin_interfaces.msg import Time
-        from geometry_msgs.msg import Twist
-        from nav_msgs.msg import Odometry
         from rosgraph_msgs.msg import Clock
-        from sensor_msgs.msg import BatteryState, Range
-        from std_msgs.msg import Bool
 
-        self._types = (Time, Odometry, Range, Bool, BatteryState, Clock)
-        self.robot, self.ros2 = robot, ros2
+        self._time, self._clock_type = Time, Clock
+        self.robot, self.ros2, self.profile = robot, ros2, profile
         self._cmd_timeout = cmd_timeout
         self._stop_timer: asyncio.TimerHandle | None = None
-        keys = robot.world.state_keys
-        self._ir = _ir_ranges(robot)
-        self._flags = [k for k in keys if k.startswith(("bumper", "cliff_")) or k == "docked"]
-        self._odom = ros2.publisher("odom", Odometry)
-        self._ranges = {k: ros2.publisher(k, Range, qos="sensor_data") for k in self._ir}
-        self._bools = {k: ros2.publisher(k, Bool) for k in self._flags}
-        self._battery = ros2.publisher("battery_state", BatteryState)
+        odometry, command = profile.odometry, profile.command
+        self._odom = self._publisher(odometry)
+        self._sensors = [self._publisher(t) for t in profile.sensors(robot.sensors)]
+        self._status = [self._publisher(t) for t in profile.status]
         self._clock = ros2.publisher("/clock", Clock) if sim_clock else None
         self._sim_clock = sim_clock
-        self._cmd = ros2.subscribe("cmd_vel", Twist, callback=self._on_cmd_vel)
-        self._state = robot.state.subscribe(self._publish, keys=keys)
-        self.topics = sorted(
-            p.topic for p in (self._odom, *self._ranges.values(), *self._bools.values())
+        self._command = command.message_class()
+        self._cmd = ros2.subscribe(
+            command.name, self._command, callback=self._on_command, qos=command.qos
         )
+        self._state = robot.state.subscribe(self._publish, keys=robot.world.state_keys)
+        self.topics = sorted(p.topic for _, _, p in (self._odom, *self._sensors))
+
+    def _publisher(self, topic: Topic[V]) -> tuple[Topic[V], type, Ros2Publisher[Any]]:
+        cls = topic.message_class()
+        return topic, cls, self.ros2.publisher(topic.name, cls, qos=topic.qos)
 
     def close(self) -> None:
         """Stop publishing and listening (the robot's shutdown closes the ROS side)."""
@@ -141,8 +167,8 @@ class SimNode:
         if self._stop_timer is not None:
             self._stop_timer.cancel()
 
-    def _on_cmd_vel(self, twist: Any) -> None:
-        self.robot.drive(twist.linear.x, twist.angular.z)
+    def _on_command(self, message: Any) -> None:
+        self.robot.drive(*self.profile.command.decode(message))
         if self._stop_timer is not None:
             self._stop_timer.cancel()
         self._stop_timer = asyncio.get_running_loop().call_later(self._cmd_timeout, self.robot.stop)
@@ -152,58 +178,24 @@ class SimNode:
             return self.ros2.node.get_clock().now().to_msg()
         now = self.robot.time()
         whole = math.floor(now)
-        return self._types[0](sec=whole, nanosec=min(int((now - whole) * 1e9), 999_999_999))
+        return self._time(sec=whole, nanosec=min(int((now - whole) * 1e9), 999_999_999))
 
     def _publish(self, _changes: Mapping[str, object]) -> None:
-        _, odometry, range_type, boolean, battery_type, clock_type = self._types
         state, stamp = self.robot.state, self._stamp()
         if self._clock is not None:
-            self._clock.publish(clock_type(clock=stamp))
-        odom = odometry()
-        odom.header.stamp, odom.header.frame_id, odom.child_frame_id = stamp, "odom", "base_link"
-        x, y, yaw = self.robot.world.odom_pose()
-        odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
-        odom.pose.pose.orientation.z, odom.pose.pose.orientation.w = (
-            math.sin(yaw / 2),
-            math.cos(yaw / 2),
-        )
-        odom.twist.twist.linear.x, odom.twist.twist.angular.z = state["v"], state["w"]
-        self._odom.publish(odom)
-        for key, publisher in self._ranges.items():
-            reading, limit = state[key], self._ir[key]
-            ray = range_type(radiation_type=range_type.INFRARED, min_range=0.0, max_range=limit)
-            ray.header.stamp, ray.header.frame_id = stamp, key
-            ray.range = math.inf if reading >= limit else reading
-            publisher.publish(ray)
-        for key, publisher in self._bools.items():
-            publisher.publish(boolean(data=bool(state[key])))
-        battery = battery_type(percentage=float(state["battery"]), present=True)
-        battery.header.stamp = stamp
-        battery.power_supply_status = (
-            battery_type.POWER_SUPPLY_STATUS_CHARGING
-            if state["docked"]
-            else battery_type.POWER_SUPPLY_STATUS_DISCHARGING
-        )
-        self._battery.publish(battery)
-
-
-def _ir_ranges(robot: SimRobot) -> dict[str, float]:
-    """Each IR rangefinder's range (its MuJoCo ``cutoff``), read from the robot's model file."""
-    import mujoco
-
-    model = mujoco.MjModel.from_xml_path(str(robot.world.model_path))
-    ranges = {}
-    for index in range(model.nsensor):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_SENSOR, index)
-        if name in robot.world.state_keys and name.startswith("ir_"):
-            ranges[name] = float(model.sensor_cutoff[index])
-    return ranges
+            self._clock.publish(self._clock_type(clock=stamp))
+        odometry, odometry_type, odom = self._odom
+        reading = Odometry(self.robot.world.odom_pose(), state["v"], state["w"])
+        odom.publish(odometry.encode(odometry_type, reading, stamp))
+        for topic, cls, publisher in (*self._sensors, *self._status):
+            publisher.publish(topic.encode(cls, state, stamp))
 
 
 async def _serve(options: argparse.Namespace, out: TextIO) -> None:
-    from pyrobots_aio.ros2 import attach_ros2
+    from pyrobots_aio.ros2 import attach_ros2, profile_named
     from pyrobots_aio.sim import SimRobot
 
+    profile = profile_named(options.profile)
     robot = SimRobot(seed=options.seed, realtime=True, control_rate=options.control_rate)
     sim_clock = options.rate != 1.0
     ros2 = attach_ros2(
@@ -220,7 +212,13 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
         loop.add_signal_handler(number, stop.set)
     try:
         async with robot:
-            node = SimNode(robot, ros2, sim_clock=sim_clock, cmd_timeout=options.cmd_timeout)
+            node = SimNode(
+                robot,
+                ros2,
+                profile=profile,
+                sim_clock=sim_clock,
+                cmd_timeout=options.cmd_timeout,
+            )
             print(
                 f"sim-node {ros2.full_name} ready (domain {ros2.domain_id}, x{options.rate:g} "
                 f"real time): {len(node.topics)} topics under {ros2.namespace}",

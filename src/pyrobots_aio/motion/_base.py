@@ -1,9 +1,10 @@
 """DriveBase: the seam between the motion layer and any differential-drive base.
 
 The motion actions (`DriveBase.drive_distance`, `rotate_angle`,
-`navigate_to`, `dock`, `undock`) are written once here, against a handful of
-primitives a base provides: the simulator (`pyrobots_aio.sim.SimRobot`), a
-ROS 2 robot, or the in-memory `pyrobots_aio.testing.FakeBase`. Every motion
+`navigate_to`, `dock`, `undock`) are written once here, against the
+`DriveBackend` a base holds: the simulator's (`pyrobots_aio.sim.SimRobot`),
+ROS 2's (``Ros2Robot``), or the in-memory one of
+`pyrobots_aio.testing.FakeBase`. Every motion
 action locks `WHEELS`, drives through a per-tick controller on the base's
 own measures (as a robot's firmware would), and stops the wheels when it ends
 for any reason, cancellation and preemption included. While the robot's
@@ -16,9 +17,8 @@ action that commands motion and sees no odometry progress for
 
 from __future__ import annotations
 
-import abc
 import math
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 from .._core._numbers import finite, shown
 from .._exceptions import MotionError
@@ -32,6 +32,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from ..poses import PoseLike
+    from ._backend import DriveBackend, Pose2D
+    from ._sensors import Sensor
     from ._stall import Velocity
 
     Step = Callable[[], Velocity | None]  # the command for the next tick; None: arrived
@@ -55,13 +57,21 @@ DOCK_APPROACH = (0.45, 0.0, 0.0, "dock")
 """Where `DriveBase.dock` goes before reversing onto the dock (in the dock's frame)."""
 UNDOCK_DISTANCE = 0.35
 """Metres `DriveBase.undock` drives straight ahead, off the dock."""
+_SEAM = (  # DriveBackend's members: named in the error when missing (isinstance only says no)
+    "start",
+    "stop",
+    "sensors",
+    "frames",
+    "control_period",
+    "set_velocity",
+    "odom_pose",
+    "map_pose",
+    "control",
+)
 _MIN_V, _MIN_W = 0.03, 0.15
 _DOCK_SPEED, _DOCK_REVERSE_LIMIT = 0.05, 0.7
 _METRES = "drive_distance takes metres, at most 100 km either way"
 _RADIANS = "rotate_angle turns by radians, at most 1000 turns either way (math.radians(degrees))"
-
-Pose2D = tuple[float, float, float]
-"""A planar pose ``(x, y, yaw)``, in metres and radians."""
 
 
 def park(robot: DriveBase) -> None:
@@ -69,27 +79,19 @@ def park(robot: DriveBase) -> None:
     robot.stop()
 
 
-class DriveBase(Robot, abc.ABC):
+class DriveBase(Robot):
     """A differential-drive robot base: ``drive(v, w)``, ``stop()`` and the motion actions.
 
-    The seam. A base implements four things and gets everything else:
-
-    - ``_set_velocity(v, w)``: command linear speed ``v`` (m/s) and angular
-      speed ``w`` (rad/s) until the next command (``cmd_vel``); ``drive``
-      checks the numbers first.
-    - `odom_pose`: ``(x, y, yaw)`` dead-reckoned in the ``odom`` frame.
-    - `control_period` and ``await control(step)``: call ``step()`` after each
-      fresh sensor update (a control tick, an odometry message) until it
-      returns True; an exception from ``step`` ends the wait with it.
-      `Controllers` does the bookkeeping.
-
-    It may override `map_pose` (by default ``base_link`` in ``map``, through
-    ``robot.poses``). It publishes the state keys ``bumper``,
-    ``bumper_left``, ``bumper_right``, ``ir_<position>``,
-    ``cliff_<position>``, ``docked``, ``v`` and ``w``, and provides the
+    The seam. A base is a `DriveBackend` (velocity command, odometry, map
+    pose, control ticks, frames, sensors), which the robot holds and starts
+    with itself; the motion actions are written once here against it. It
+    publishes the state keys of its `sensors` (the standard robot's:
+    ``bumper``, ``bumper_left``, ``bumper_right``, ``ir_<position>``,
+    ``cliff_<position>``, ``docked``), ``v`` and ``w``, and provides the
     frames ``odom``, ``base_link`` and, for `dock`, ``dock``.
 
     Args:
+        backend: The base's `DriveBackend`.
         stall_timeout: Seconds a motion action may command motion without
             odometry progress before it fails with a `StallError` (default
             `STALL_TIMEOUT`, 1.5 s; `stall_timeout` changes it later).
@@ -106,9 +108,25 @@ class DriveBase(Robot, abc.ABC):
         1.0
     """
 
-    def __init__(self, *, stall_timeout: float = STALL_TIMEOUT, **options: Any) -> None:
-        super().__init__(**options)
+    def __init__(
+        self, *, backend: DriveBackend, stall_timeout: float = STALL_TIMEOUT, **options: Any
+    ) -> None:
+        missing = [name for name in _SEAM if not hasattr(backend, name)]
+        if missing:
+            msg = (
+                f"a DriveBase needs a DriveBackend; {backend!r} lacks {', '.join(missing)} "
+                "(see pyrobots_aio.motion.DriveBackend)"
+            )
+            raise TypeError(msg)
+        super().__init__(backend=backend, **options)
+        self._drive = backend
         self.stall_timeout = stall_timeout
+        self.poses.add_frame_provider(backend.frames)
+
+    @property
+    def backend(self) -> DriveBackend:
+        """The base's `DriveBackend`, started and stopped with the robot."""
+        return self._drive
 
     @property
     def stall_timeout(self) -> float:
@@ -127,33 +145,33 @@ class DriveBase(Robot, abc.ABC):
             "stall_timeout", seconds, positive=True, must="a positive number of seconds"
         )
 
-    # -- the seam ---------------------------------------------------------
-
-    @abc.abstractmethod
-    def _set_velocity(self, v: float, w: float) -> None:
-        """Command ``v`` (m/s) and ``w`` (rad/s), finite numbers, until the next command."""
-
-    @abc.abstractmethod
-    def odom_pose(self) -> Pose2D:
-        """The pose ``(x, y, yaw)`` dead-reckoned from the wheels, in the ``odom`` frame."""
+    # -- the seam: the backend's ------------------------------------------
 
     @property
-    @abc.abstractmethod
+    def sensors(self) -> tuple[Sensor, ...]:
+        """The sensors the base publishes into ``robot.state`` (besides ``v`` and ``w``)."""
+        return self._drive.sensors
+
+    @property
     def control_period(self) -> float:
         """Seconds between sensor updates (control ticks)."""
+        return self._drive.control_period
 
-    @abc.abstractmethod
+    def odom_pose(self) -> Pose2D:
+        """The pose ``(x, y, yaw)`` dead-reckoned from the wheels, in the ``odom`` frame."""
+        return self._drive.odom_pose()
+
+    def map_pose(self) -> Pose2D:
+        """The robot's pose ``(x, y, yaw)`` in the ``map`` frame (where it is localised)."""
+        return self._drive.map_pose()
+
     async def control(self, step: Callable[[], bool]) -> None:
         """Call ``step()`` after each fresh sensor update until it returns True.
 
         ``step`` reads the fresh state and sets the wheel command; the motion
         actions are built on it. Cancelling the wait removes it.
         """
-
-    def map_pose(self) -> Pose2D:
-        """The robot's pose ``(x, y, yaw)`` in the ``map`` frame (where it is localised)."""
-        me = self.poses.myself()
-        return me.x, me.y, self.poses.euler(me)[2]
+        await self._drive.control(step)
 
     # -- direct commands --------------------------------------------------
 
@@ -173,11 +191,11 @@ class DriveBase(Robot, abc.ABC):
         v, w = checked("v", v), checked("w", w)
         if v or w:
             self._refuse_motion(f"drive({v!r}, {w!r})")
-        self._set_velocity(v, w)
+        self._drive.set_velocity(v, w)
 
     def stop(self) -> None:
         """Stop the wheels."""
-        self._set_velocity(0.0, 0.0)
+        self._drive.set_velocity(0.0, 0.0)
 
     def halt_actuators(self) -> None:
         """Stop the wheels (the emergency stop calls it first)."""
@@ -344,7 +362,7 @@ class DriveBase(Robot, abc.ABC):
                 self.stop()
                 return True
             watch.check(command)
-            self._set_velocity(*command)
+            self._drive.set_velocity(*command)
             return False
 
         try:
@@ -352,38 +370,3 @@ class DriveBase(Robot, abc.ABC):
                 await self.control(tick)
         finally:
             self.stop()
-
-
-class World(Protocol):
-    """What `WorldBase` needs of the world it owns (`SimWorld`, `FakeWorld`)."""
-
-    def set_command(self, v: float, w: float) -> None:
-        """Drive at ``v`` (m/s) and ``w`` (rad/s) until the next command."""
-
-    def odom_pose(self) -> Pose2D:
-        """The pose dead-reckoned from the wheels, in the ``odom`` frame."""
-
-    def base_pose(self) -> Pose2D:
-        """The true pose, in the ``map`` frame."""
-
-
-class WorldBase(DriveBase):
-    """A `DriveBase` over a simulated world it owns, ``robot.world`` (a `World`).
-
-    The velocity command and odometry are the world's, and the map pose is
-    its true pose (a simulated robot is perfectly localised). A subclass sets
-    ``self.world`` and still provides `control_period` and `control`.
-    """
-
-    world: World
-
-    def _set_velocity(self, v: float, w: float) -> None:
-        self.world.set_command(v, w)
-
-    def odom_pose(self) -> Pose2D:
-        """The pose dead-reckoned by the world, in the ``odom`` frame."""
-        return self.world.odom_pose()
-
-    def map_pose(self) -> Pose2D:
-        """The world's true pose of the robot, in the ``map`` frame."""
-        return self.world.base_pose()

@@ -1,14 +1,18 @@
 """Robot: the composition root, an async context manager around the executive.
 
-``async with Robot() as robot:`` opens the root scope, starts the backend, and
-on exit stops the monitors, cancels every action (bounded by ``cancel_grace``)
-and stops the backend, children before parents. Nothing starts in ``__init__``.
+``async with Robot() as robot:`` opens the root scope and starts what the
+robot runs (signal handling, the loop watchdog, the live view, extensions, the
+backend), each step pushed on one `contextlib.AsyncExitStack`; leaving unwinds
+it: the monitors stop, every action is cancelled (bounded by
+``cancel_grace``), then the backend stops, children before parents. Nothing
+starts in ``__init__``.
 """
 
 from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import contextlib
 import logging
 import math
 import types
@@ -34,7 +38,7 @@ from ._monitoring import StateMethods
 from ._offloop import Workers, blocking_action
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Coroutine, Iterable
+    from collections.abc import Callable, Coroutine, Iterable, Mapping
 
     from ..actions import ActionHandle
     from ._backend import Backend
@@ -109,11 +113,12 @@ class Robot(StateMethods, EmergencyStop):
             msg = f"handle_signals must be True or False, got {flag!r}"
             raise TypeError(msg)
         self.handle_signals = handle_signals
-        self._signals: SignalStop | None = None
         self._block_threshold = check_block_threshold(block_threshold)
         self._blockwatch: BlockWatch | None = None
         self._workers: Workers | None = None  # robot.to_thread's threads, from its first call
         self._attached: dict[str, Action[Any, Any, Any]] = {}
+        self._extensions: dict[str, Backend] = {}
+        self._running = contextlib.AsyncExitStack()  # what __aexit__ undoes
         self.dummy = dummy
         self.instruments = Instruments()
         for instrument in instruments:
@@ -130,7 +135,7 @@ class Robot(StateMethods, EmergencyStop):
         self._state = StateStore()
         self.events = EventManager(self, self._state, self._executive, self.instruments)
         self.poses = PoseManager()
-        self.backend = backend
+        self._backend = backend
         self.live = None if serve is None else LiveView(serve)
         for item in actions:
             self._attach(item)
@@ -151,7 +156,7 @@ class Robot(StateMethods, EmergencyStop):
             self._attach_one(action(item))  # type: ignore[call-overload]
 
     def _attach_one(self, act: Action[Any, Any, Any]) -> None:
-        if hasattr(type(self), act.name) or act.name in vars(self):
+        if self._name_taken(act.name):
             msg = f"cannot attach action {act.name!r}: {type(self).__name__} already has that name"
             raise ActionDefinitionError(msg)
         known = self._attached.get(act.name)
@@ -163,7 +168,15 @@ class Robot(StateMethods, EmergencyStop):
             raise ActionDefinitionError(msg)
         self._attached[act.name] = act
 
-    def __getattr__(self, name: str) -> BoundAction[..., Any]:
+    def _name_taken(self, name: str) -> bool:
+        """Whether ``name`` is an attribute of the robot or one of its extensions."""
+        return hasattr(type(self), name) or name in vars(self) or name in self._extensions
+
+    def __getattr__(self, name: str) -> Any:
+        """An attached action, bound to the robot (a `BoundAction`), or an extension."""
+        extensions = self.__dict__.get("_extensions", {})
+        if name in extensions:
+            return extensions[name]
         attached = self.__dict__.get("_attached", {})
         if name in attached:
             return BoundAction(attached[name], self)
@@ -205,77 +218,113 @@ class Robot(StateMethods, EmergencyStop):
         loop = current_loop()
         if loop is None:
             raise no_asyncio_loop(f"run {type(self).__name__}")
-        self._executive.open(loop)
-        self._state.bind(loop)
-        self._watch_loop(loop)
-        if self.handle_signals:
-            self._signals = SignalStop().__enter__()
-        try:
-            await self._start()
-        except BaseException as exc:
-            try:
-                await self._executive.close(SHUTDOWN_REASON)
-            finally:
-                self._state.bind(None)
-                self._close_workers()
-                self._unwatch_loop()
-                self._release_signals(exc)
-            raise
+        async with contextlib.AsyncExitStack() as stack:
+            await self._open(stack, loop)
+            self._running = stack.pop_all()
         return self
 
-    async def __aexit__(self, *exc_info: object) -> None:
-        # Each stage runs even if the one before was cancelled (it finishes its bounded
-        # wait, then re-raises): monitors, then actions, then the backend; the loop
-        # watchdog last, so that it sees the whole exit.
-        try:
-            try:
-                try:
-                    try:
-                        await self._stop_monitoring()
-                    finally:
-                        await self._executive.close(SHUTDOWN_REASON)
-                finally:
-                    await self._stop()
-            finally:
-                self._state.bind(None)
-                self._close_workers()
-                self._unwatch_loop()
-        except BaseException as exc:
-            self._release_signals(exc)
-            raise
-        error = exc_info[1]
-        self._release_signals(error if isinstance(error, BaseException) else None)
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: types.TracebackType | None,
+    ) -> None:
+        running, self._running = self._running, contextlib.AsyncExitStack()
+        await running.__aexit__(exc_type, exc, tb)
 
-    def _release_signals(self, exc: BaseException | None) -> None:
-        """Give the signals back; after one came, raise what Python's default would have."""
-        signals, self._signals = self._signals, None
-        if signals is not None:
-            signals.__exit__(type(exc) if exc is not None else None, exc, None)
+    async def _open(
+        self, stack: contextlib.AsyncExitStack, loop: asyncio.AbstractEventLoop
+    ) -> None:
+        """Start everything the robot runs, each step's undoing pushed on ``stack``.
 
-    async def _start(self) -> None:
-        """Start what the robot owns (the live view, the backend); subclasses extend this."""
+        The stack unwinds in reverse, each step even if the one before was
+        cancelled (it finishes its bounded wait, then re-raises): the monitors,
+        then the actions (children before parents), the backend, the extensions
+        and the live view, the state's loop, to_thread's idle threads, the loop watchdog (it sees the
+        whole exit) and the signals last. A start that fails unwinds what
+        started before it.
+        """
+        if self.handle_signals:
+            stack.enter_context(SignalStop())
+        if self._block_threshold is not None:
+            self._watch_loop(loop, self._block_threshold)
+            stack.callback(self._unwatch_loop)
+        stack.callback(self._close_workers)
+        self._state.bind(loop)
+        stack.callback(self._state.bind, None)
+        self._executive.open(loop)
+        stack.push_async_callback(self._close_actions)  # if a start fails (a run closed it above)
         if self.live is not None:
             self.live.start(self)
-        try:
-            if self.backend is not None:
-                await self.backend.start(self)
-        except BaseException:
-            if self.live is not None:
-                self.live.stop()
-            raise
+            stack.callback(self.live.stop)
+        for part in self._parts():
+            await part.start(self)
+            stack.push_async_callback(part.stop)
+        stack.push_async_callback(self._close_actions)
+        stack.push_async_callback(self.events.cancel_all)
 
-    async def _stop_monitoring(self) -> None:
-        """Stop event monitors before actions are cancelled; subclasses extend this."""
-        await self.events.cancel_all()
+    def _parts(self) -> list[Backend]:
+        """What starts with the robot, in order: its extensions, then its backend."""
+        parts = list(self._extensions.values())
+        if self._backend is not None:
+            parts.append(self._backend)
+        return parts
 
-    async def _stop(self) -> None:
-        """Stop the backend once every action is done, then the live view; subclasses extend it."""
-        try:
-            if self.backend is not None:
-                await self.backend.stop()
-        finally:
-            if self.live is not None:
-                self.live.stop()
+    async def _close_actions(self) -> None:
+        """Cancel every action and wait for them; no new root action starts from here on."""
+        if self._executive.is_running:
+            await self._executive.close(SHUTDOWN_REASON)
+
+    @property
+    def backend(self) -> Backend | None:
+        """The backend connecting the robot to hardware or a simulator (None: a bare robot).
+
+        It starts inside ``async with robot``, after the extensions, and stops
+        once every action is done (`Backend`).
+        """
+        return self._backend
+
+    @property
+    def extensions(self) -> Mapping[str, Backend]:
+        """The parts given with `add_extension`, by name (read-only)."""
+        return types.MappingProxyType(self._extensions)
+
+    def add_extension(self, name: str, extension: Backend) -> None:
+        """Give the robot a part that runs with it, reachable as ``robot.<name>``.
+
+        For what a program adds to a robot it did not write, such as a ROS 2
+        node (`pyrobots_aio.ros2.attach_ros2`). Extensions start inside
+        ``async with robot`` in the order given, before the robot's backend,
+        and stop after it, once every action is done.
+
+        Raises:
+            PyRobotsError: The robot is running, or ``name`` is taken (an
+                attribute, an attached action or another extension).
+
+        Example:
+            >>> class Lamp:
+            ...     async def start(self, robot: Robot) -> None:
+            ...         robot.state.lamp = "on"
+            ...     async def stop(self) -> None:
+            ...         pass
+            >>> async def main() -> str:
+            ...     robot = Robot()
+            ...     robot.add_extension("lamp", Lamp())
+            ...     async with robot:
+            ...         return robot.state.lamp
+            >>> asyncio.run(main())
+            'on'
+        """
+        if self.is_running:
+            msg = f"add extensions before 'async with robot:', not while {self!r} runs"
+            raise PyRobotsError(msg)
+        if not name.isidentifier():
+            msg = f"an extension's name must be an identifier (robot.<name>), got {name!r}"
+            raise PyRobotsError(msg)
+        if self._name_taken(name) or name in self._attached:
+            msg = f"cannot add the extension {name!r}: {type(self).__name__} already has that name"
+            raise PyRobotsError(msg)
+        self._extensions[name] = extension
 
     # -- from other threads -----------------------------------------------
 
@@ -336,13 +385,11 @@ class Robot(StateMethods, EmergencyStop):
         """Seconds without the loop turning that the watchdog reports (None: no watchdog)."""
         return self._block_threshold
 
-    def _watch_loop(self, loop: asyncio.AbstractEventLoop) -> None:
-        if self._block_threshold is None:
-            return
+    def _watch_loop(self, loop: asyncio.AbstractEventLoop, threshold: float) -> None:
         executive = self._executive
         self._blockwatch = BlockWatch(
             loop,
-            self._block_threshold,
+            threshold,
             self._log_scope.logger("pyrobots_aio.watchdog"),
             self.instruments,
             lambda task: blocking_action(executive.running(), task),

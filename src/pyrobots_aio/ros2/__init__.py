@@ -16,38 +16,50 @@ running inside ``async with robot``:
   state, the goal's result is the action's result;
 - ``/diagnostics`` reports whether the watched state is fresh.
 
-`Ros2Robot` is a `pyrobots_aio.motion.DriveBase` over standard messages
-(``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock ``Bool``): the motion
-actions and the random walk run on it as on the simulator.
+`Ros2Robot` is a `pyrobots_aio.motion.DriveBase` whose backend
+(`Ros2Backend`) speaks a `Profile`: one table of topic names, types and
+conversions, used by ``pyrobots-aio sim-node`` as well. `STANDARD` is the
+standard messages' (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock
+``Bool``); the motion actions and the random walk run on it as on the simulator.
 
 Layer: above ``sim`` (which it does not import) and below ``cli``, on the public API only.
 A program beside a ``sim-node --rate R`` runs at its pace with
 `pyrobots_aio.loops.run_scaled`.
 """
 
+from ._backend import DOCK_IN_ODOM as DOCK_IN_ODOM
+from ._backend import Ros2Backend as Ros2Backend
 from ._diagnostics import staleness as staleness
 from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
+from ._profiles import PROFILES as PROFILES
+from ._profiles import STANDARD as STANDARD
+from ._profiles import Odometry as Odometry
+from ._profiles import Profile as Profile
+from ._profiles import Topic as Topic
+from ._profiles import profile_named as profile_named
 from ._rclpy import qos_profile as qos_profile
 from ._rclpy import ros_name as ros_name
-from ._robot import CLIFF_SENSORS as CLIFF_SENSORS
-from ._robot import DOCK_IN_ODOM as DOCK_IN_ODOM
-from ._robot import IR_SENSORS as IR_SENSORS
 from ._robot import Ros2Robot as Ros2Robot
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
 
 __all__ = [
-    "CLIFF_SENSORS",
     "DOCK_IN_ODOM",
-    "IR_SENSORS",
+    "PROFILES",
+    "STANDARD",
+    "Odometry",
+    "Profile",
+    "Ros2Backend",
     "Ros2Node",
     "Ros2Publisher",
     "Ros2Robot",
     "Ros2Subscription",
     "ToState",
+    "Topic",
     "attach_ros2",
+    "profile_named",
     "qos_profile",
     "ros_name",
     "staleness",

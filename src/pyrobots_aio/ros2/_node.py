@@ -1,9 +1,9 @@
 """`Ros2Node`: a robot's ROS 2 side (``robot.ros2``), started and stopped with the robot.
 
 `attach_ros2` gives any robot — a plain `Robot`, a `SimRobot`, a subclass —
-its node: the node becomes part of the robot's backend, so it starts inside
-``async with robot`` before the robot's own backend and stops after it, once
-every action (ROS 2 goals included) is done.
+its node, as the robot's extension ``ros2``: it starts inside ``async with
+robot`` before the robot's own backend and stops after it, once every action
+(ROS 2 goals included) is done. A `Ros2Robot`'s node is its backend's.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from ._topics import Ros2Publisher, Ros2Subscription, ToState, check_topic_type,
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Mapping
 
-    from ..robot import Backend, Robot
+    from ..robot import Robot
     from ..supervision import HealthMonitor
 
 _log = logging.getLogger("pyrobots_aio.ros2")
@@ -411,35 +411,12 @@ class Ros2Node:
         return f"<Ros2Node {self.full_name} {state}>"
 
 
-class _WithRos2:
-    """A robot's backend with its ROS 2 node: the node starts first and stops last."""
-
-    def __init__(self, ros2: Ros2Node, inner: Backend | None) -> None:
-        self.ros2, self.inner = ros2, inner
-
-    async def start(self, robot: Robot) -> None:
-        await self.ros2.start(robot)
-        if self.inner is None:
-            return
-        try:
-            await self.inner.start(robot)
-        except BaseException:
-            await self.ros2.stop()
-            raise
-
-    async def stop(self) -> None:
-        try:
-            if self.inner is not None:
-                await self.inner.stop()
-        finally:
-            await self.ros2.stop()
-
-    def __repr__(self) -> str:
-        return f"<{self.inner!r} with {self.ros2!r}>"
-
-
 def attach_ros2(robot: Robot, name: str = "pyrobots_aio", **options: Any) -> Ros2Node:
     """Give ``robot`` a ROS 2 node, as ``robot.ros2``; it runs inside ``async with robot``.
+
+    The node is the robot's extension ``ros2`` (`Robot.add_extension`): it
+    starts before the robot's backend and stops after it, once every action
+    (ROS 2 goals included) is done.
 
     Args:
         robot: Any robot, not running yet.
@@ -466,10 +443,10 @@ def attach_ros2(robot: Robot, name: str = "pyrobots_aio", **options: Any) -> Ros
     if robot.is_running:
         msg = f"attach the ROS 2 node before 'async with robot:', not while {robot!r} runs"
         raise PyRobotsError(msg)
-    if "ros2" in vars(robot):
-        msg = f"{robot!r} has a ROS 2 node already: {vars(robot)['ros2']!r}"
+    existing = getattr(robot, "ros2", None)
+    if isinstance(existing, Ros2Node):
+        msg = f"{robot!r} has a ROS 2 node already: {existing!r}"
         raise PyRobotsError(msg)
     node = Ros2Node(name, **options)
-    robot.backend = _WithRos2(node, robot.backend)
-    robot.ros2 = node  # type: ignore[attr-defined]
+    robot.add_extension("ros2", node)
     return node

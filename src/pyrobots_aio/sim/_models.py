@@ -11,11 +11,13 @@ model lacking one fails at load time with a message naming it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import ModelLoadError
+from ..motion import Sensor, SensorKind
 
 if TYPE_CHECKING:
     from types import ModuleType
@@ -75,9 +77,8 @@ def model_path(name: str = DEFAULT_SCENE) -> Path:
 
 _IR_PREFIX = "ir_"
 _CLIFF_PREFIX = "cliff_"
-_FIXED_KEYS_BEFORE = ("bumper", "bumper_left", "bumper_right")
-_FIXED_KEYS_AFTER = (
-    "docked",
+_BUMPER_KEYS = ("bumper", "bumper_left", "bumper_right")
+_MORE_KEYS = (  # read after the sensors (`ModelLayout.sensors`)
     "v",
     "w",
     "encoder_left",
@@ -112,7 +113,8 @@ class _Finder:
             self.fail(f"its numeric {name!r} must be {'> 0' if positive else '>= 0'}, not {value}")
         return value
 
-    def rangefinders(self, prefix: str) -> list[tuple[str, int, float]]:
+    def rangefinders(self, prefix: str) -> list[tuple[str, int, float, float]]:
+        """``(name, sensordata index, cutoff, bearing)`` of each rangefinder named ``prefix...``."""
         model, found = self.model, []
         rangefinder = int(self.mujoco.mjtSensor.mjSENS_RANGEFINDER)
         for index in range(model.nsensor):
@@ -121,7 +123,8 @@ class _Finder:
                 continue
             if int(model.sensor_type[index]) != rangefinder:
                 self.fail(f"its sensor {name!r} must be a rangefinder")
-            found.append((name, int(model.sensor_adr[index]), float(model.sensor_cutoff[index])))
+            adr, cutoff = int(model.sensor_adr[index]), float(model.sensor_cutoff[index])
+            found.append((name, adr, cutoff, _bearing(model, int(model.sensor_objid[index]))))
         return found
 
     def fail(self, problem: str) -> None:
@@ -160,6 +163,7 @@ class ModelLayout:
     battery_runtime: float
     battery_charge_time: float
     frame_sites: dict[str, int]
+    sensors: tuple[Sensor, ...]
     state_keys: tuple[str, ...]
 
     @classmethod
@@ -178,8 +182,15 @@ class ModelLayout:
         wheel_y = [
             float(model.body_pos[find.id("body", n)][1]) for n in ("left_wheel", "right_wheel")
         ]
-        ir = tuple(find.rangefinders(_IR_PREFIX))
-        cliffs = tuple((name, adr) for name, adr, _ in find.rangefinders(_CLIFF_PREFIX))
+        rays = find.rangefinders(_IR_PREFIX)
+        ir = tuple((name, adr, cutoff) for name, adr, cutoff, _ in rays)
+        cliffs = tuple((name, adr) for name, adr, _, _ in find.rangefinders(_CLIFF_PREFIX))
+        sensors = (
+            *(Sensor(key, SensorKind.FLAG) for key in _BUMPER_KEYS),
+            *(Sensor(k, SensorKind.RANGE, reach=cutoff, bearing=b) for k, _, cutoff, b in rays),
+            *(Sensor(key, SensorKind.FLAG) for key, _ in cliffs),
+            Sensor("docked", SensorKind.FLAG),
+        )
         return cls(
             wheel_radius=float(model.geom_size[find.id("geom", "left_wheel")][0]),
             track=abs(wheel_y[0] - wheel_y[1]),
@@ -202,12 +213,8 @@ class ModelLayout:
             battery_runtime=find.numeric("battery_runtime", positive=True),
             battery_charge_time=find.numeric("battery_charge_time", positive=True),
             frame_sites=_frame_sites(model, base, find.id("site", "dock")),
-            state_keys=(
-                *_FIXED_KEYS_BEFORE,
-                *(k for k, _, _ in ir),
-                *(k for k, _ in cliffs),
-                *_FIXED_KEYS_AFTER,
-            ),
+            sensors=sensors,
+            state_keys=(*(s.key for s in sensors), *_MORE_KEYS),
         )
 
 
@@ -217,6 +224,12 @@ def _top_speed(model: Any, actuators: tuple[int, int]) -> float:
         for a in actuators
     ]
     return min(limits)
+
+
+def _bearing(model: Any, site: int) -> float:
+    """Where the site's z axis (a rangefinder's ray) points in its body's floor plane."""
+    w, x, y, z = (float(v) for v in model.site_quat[site])
+    return math.atan2(2 * (y * z - w * x), 2 * (x * z + w * y))
 
 
 def _half_sizes(model: Any, site: int) -> tuple[float, float, float]:

@@ -1,8 +1,7 @@
 """SimRobot: the simulated differential-drive robot, a `DriveBase` over MuJoCo.
 
-It provides the seam (velocity command, odometry, map pose, control ticks)
-from its `SimWorld` and `SimBackend`; the motion actions come from
-`DriveBase`. The names below moved to `pyrobots_aio.motion` and stay
+Its backend is a `SimBackend` ticking a `SimWorld`; the motion actions come
+from `DriveBase`. The names below moved to `pyrobots_aio.motion` and stay
 importable from here.
 """
 
@@ -10,20 +9,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..motion import ANGLE_TOLERANCE, DISTANCE_TOLERANCE, DOCK_APPROACH, WHEELS, WorldBase
+from ..motion import ANGLE_TOLERANCE, DISTANCE_TOLERANCE, DOCK_APPROACH, WHEELS, DriveBase
 from ._backend import SimBackend
-from ._frames import WorldFrames
 from ._world import SimWorld
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
     from pathlib import Path
 
 
 __all__ = ["ANGLE_TOLERANCE", "DISTANCE_TOLERANCE", "DOCK_APPROACH", "WHEELS", "SimRobot"]
 
 
-class SimRobot(WorldBase):
+class SimRobot(DriveBase):
     """The MuJoCo simulation of a Create-3-sized robot in its arena; it starts docked.
 
     Time: the event loop's clock is the simulation's. When the robot starts
@@ -72,20 +69,10 @@ class SimRobot(WorldBase):
         physics_dt: float = 0.002,
         **options: Any,
     ) -> None:
-        self.world: SimWorld = SimWorld(model, seed=seed, physics_dt=physics_dt)
-        self.sim = SimBackend(self.world, control_rate=control_rate, realtime=realtime)
-        super().__init__(backend=self.sim, **options)
+        world = SimWorld(model, seed=seed, physics_dt=physics_dt)
+        sim = SimBackend(world, control_rate=control_rate, realtime=realtime)
+        super().__init__(backend=sim, **options)
+        self.sim = sim
+        self.world = world
         self.seed = seed
         self.realtime = realtime
-        self.poses.add_frame_provider(WorldFrames(self.world))
-
-    # -- the DriveBase seam (velocity, odometry and map pose: the world's) --
-
-    @property
-    def control_period(self) -> float:
-        """Seconds between control ticks (``1 / control_rate``)."""
-        return self.sim.period
-
-    async def control(self, step: Callable[[], bool]) -> None:
-        """Call ``step()`` after every control tick until it returns True (`SimBackend.control`)."""
-        await self.sim.control(step)

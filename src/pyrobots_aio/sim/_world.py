@@ -44,6 +44,8 @@ if TYPE_CHECKING:
 
     from numpy.typing import NDArray
 
+    from ..motion import Sensor
+
 __all__ = ["SimWorld"]
 
 _log = logging.getLogger("pyrobots_aio.sim")
@@ -252,6 +254,16 @@ class SimWorld:
     def state_keys(self) -> tuple[str, ...]:
         """The keys of `read_sensors`, in the order it returns them."""
         return self._layout.state_keys
+
+    @property
+    def sensors(self) -> tuple[Sensor, ...]:
+        """The robot's sensors as its model has them (the shipped one: `motion.SENSORS`).
+
+        The bumper's, IR rangefinders', cliff sensors' and the dock's: the
+        first keys of `read_sensors`, each with its kind, and for a
+        rangefinder its cutoff and the direction it looks.
+        """
+        return self._layout.sensors
 
     @property
     def frame_names(self) -> tuple[str, ...]:

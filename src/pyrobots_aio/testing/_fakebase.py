@@ -9,12 +9,14 @@ the dock's pad. No physics beyond that: commands take effect at once (up to the
 simulator's top wheel speed), odometry integrates the commanded speeds exactly
 in free space; against a box the wheels stall, as the simulator's do, and the
 odometry follows what the robot really did (nothing, head on: a motion action
-then stops with a stall).
+then stops with a stall). Its sensors are those of the table
+(`pyrobots_aio.motion.SENSORS`): each range sensor is a ray from the robot's
+rim along its bearing; a flag it does not model (a cliff: the floor has none)
+reads False.
 """
 
 from __future__ import annotations
 
-import asyncio
 import math
 from typing import TYPE_CHECKING, Any, cast
 
@@ -22,14 +24,14 @@ import numpy as np
 
 from .. import UnknownFrameError
 from .._core._numbers import as_float, finite, shown
-from ..motion import Controllers, WorldBase, limit_speeds
+from ..motion import SENSORS, DriveBase, SensorKind, TickingBackend, limit_speeds
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Collection, Iterable
+    from collections.abc import Collection, Iterable
 
     from numpy.typing import NDArray
 
-    from ..motion import Pose2D
+    from ..motion import Pose2D, Sensor
 
 RADIUS = 0.171
 """Metres: the robot's radius; its charging contacts are this far behind its centre."""
@@ -37,22 +39,7 @@ TRACK = 0.235
 """Metres between the wheels (the simulator's, a Create 3's)."""
 TOP_WHEEL_SPEED = 0.306
 """Metres per second: the fastest a wheel turns (the simulator's, a Create 3's)."""
-IR_RANGE = 0.4
-"""Metres: an IR rangefinder's reading when it sees nothing closer."""
-IR_SENSORS = {
-    "ir_side_left": 65.0,
-    "ir_left": 40.0,
-    "ir_front_left": 20.0,
-    "ir_front_center_left": 5.0,
-    "ir_front_center_right": -5.0,
-    "ir_front_right": -20.0,
-    "ir_right": -45.0,
-}
-"""The IR rangefinders and their bearings (degrees, from straight ahead), as on the simulator."""
-CLIFF_SENSORS = ("cliff_front_left", "cliff_front_right", "cliff_side_left", "cliff_side_right")
-"""The cliff sensors; the fake floor has no cliff, so they read False."""
-_IR_RADIUS = 0.165
-_IR_BEARINGS = [(key, math.radians(degrees)) for key, degrees in IR_SENSORS.items()]
+_IR_RADIUS = 0.165  # metres from the centre: where the range sensors' rays start
 _CONTACT = 1e-6  # metres: closer than this to a box counts as touching it
 _BUMPER_SIDE = 0.25  # radians: a hit this close to straight ahead presses both sides
 _DOCK_PAD = (0.012, 0.04)  # half-extents of the pad the charging contacts must lie on
@@ -148,6 +135,7 @@ class FakeWorld:
             middle of its face, x pointing into the room.
         obstacles: More boxes, each ``(xmin, ymin, xmax, ymax)``.
         start: Where the robot starts, ``(x, y, yaw)``; by default on the dock.
+        sensors: Its sensors (default: the standard robot's, `pyrobots_aio.motion.SENSORS`).
 
     Attributes:
         jammed: While True, the wheels do not turn whatever the command (a
@@ -169,7 +157,10 @@ class FakeWorld:
         dock: Pose2D = (-1.9, 0.0, 0.0),
         obstacles: Iterable[tuple[float, float, float, float]] = (),
         start: Pose2D | None = None,
+        sensors: Iterable[Sensor] = SENSORS,
     ) -> None:
+        self.sensors = tuple(sensors)
+        self._ray_reach = max((s.reach for s in self.sensors), default=0.0)
         room = _bounds("room", room)
         obstacles = [_bounds("an obstacle", box) for box in obstacles]
         dx, dy, dyaw = _finite("dock", dock)
@@ -255,10 +246,10 @@ class FakeWorld:
             self._odom = _arc(self._odom, v * dt, w * dt)
 
     def read_sensors(self) -> dict[str, object]:
-        """Every reading, keyed as in ``robot.state`` (the keys of `DriveBase`)."""
+        """Every reading, keyed as in ``robot.state``: each of `sensors`, then ``v`` and ``w``."""
         x, y, yaw = self._pose
         left = right = False
-        seen = []  # the boxes an IR ray may reach
+        seen = []  # the boxes a range sensor's ray may reach
         for box in self.boxes:
             nx, ny = box.nearest(x, y)
             gap = math.hypot(x - nx, y - ny)
@@ -266,16 +257,18 @@ class FakeWorld:
                 bearing = math.remainder(math.atan2(ny - y, nx - x) - yaw, math.tau)
                 left |= -_BUMPER_SIDE < bearing <= math.pi / 2
                 right |= -math.pi / 2 <= bearing < _BUMPER_SIDE
-            if gap < _IR_RADIUS + IR_RANGE:
+            if gap < _IR_RADIUS + self._ray_reach:
                 seen.append(box)
-        state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
-        state["bumper_right"] = right
-        for key, bearing in _IR_BEARINGS:
-            angle = yaw + bearing
-            ox, oy = x + _IR_RADIUS * math.cos(angle), y + _IR_RADIUS * math.sin(angle)
-            state[key] = min([IR_RANGE, *(box.ray(ox, oy, angle) for box in seen)])
-        state.update(dict.fromkeys(CLIFF_SENSORS, False))
-        state["docked"] = self._docked()
+        flags = {"bumper": left or right, "bumper_left": left, "bumper_right": right}
+        flags["docked"] = self._docked()
+        state: dict[str, object] = {}
+        for sensor in self.sensors:
+            if sensor.kind is SensorKind.RANGE:
+                angle = yaw + sensor.bearing
+                ox, oy = x + _IR_RADIUS * math.cos(angle), y + _IR_RADIUS * math.sin(angle)
+                state[sensor.key] = min([sensor.reach, *(box.ray(ox, oy, angle) for box in seen)])
+            else:
+                state[sensor.key] = flags.get(sensor.key, False)
         state["v"], state["w"] = self.command
         return state
 
@@ -338,16 +331,42 @@ class FakeFrames:
         return self.FRAMES
 
 
-class FakeBase(WorldBase):
+class FakeBackend(TickingBackend[FakeWorld]):
+    """`FakeBase`'s backend: it ticks a `FakeWorld` every ``period`` seconds of the loop's clock.
+
+    On a virtual-time loop its ticks run back to back while nothing else is
+    due (`TickingBackend`); on an ordinary loop it follows the wall clock.
+    """
+
+    def __init__(self, world: FakeWorld, *, period: float) -> None:
+        super().__init__(world, period=period, frames=FakeFrames(world))
+        self._start = 0.0
+
+    def start_clock(self, now: float) -> float:
+        """Count ticks from ``now``; the first is one period on."""
+        self._start = now
+        return now + self.period
+
+    def advance(self) -> float:
+        """Move the world by one period; the next tick is due at ``start + (ticks+1) * period``."""
+        self.world.step(self.period)
+        return self._start + (self.ticks + 1) * self.period
+
+    def __repr__(self) -> str:
+        return f"<FakeBackend {1 / self.period:g} Hz tick {self.ticks}>"
+
+
+class FakeBase(DriveBase):
     """A `DriveBase` in memory: the motion actions and the random walk, with no simulator.
 
     The robot (round, 0.171 m radius) starts on its dock in a 4 m x 4 m walled
     room (interior ``[-2, 2] x [-2, 2]``, the dock against the middle of the
     west wall), as the simulated robot does. Each control tick (``1 /
     control_rate`` of the loop's clock) it moves by the command, then
-    publishes ``bumper``, ``bumper_left``, ``bumper_right``, the seven
-    ``ir_<position>`` ranges, four ``cliff_<position>`` (False), ``docked``,
-    ``v`` and ``w``, and runs the motion controllers. ``robot.world`` (a
+    publishes its `sensors` (the standard robot's: ``bumper``,
+    ``bumper_left``, ``bumper_right``, the seven ``ir_<position>`` ranges,
+    four ``cliff_<position>`` (False), ``docked``), ``v`` and ``w``, and runs
+    the motion controllers (its backend is a `FakeBackend`). ``robot.world`` (a
     `FakeWorld`) holds the truth and lets a test ``place`` the robot or jam
     its wheels (``robot.world.jammed = True``). In
     virtual time (``pyrobots_aio.sim.run``, ``@pytest.mark.virtual_time``) a
@@ -359,6 +378,7 @@ class FakeBase(WorldBase):
         dock: The dock's frame ``(x, y, yaw)`` in the map.
         obstacles: Boxes ``(xmin, ymin, xmax, ymax)`` in the room.
         start: The start pose ``(x, y, yaw)``; by default on the dock.
+        sensors: Its sensors (default: the standard robot's, `pyrobots_aio.motion.SENSORS`).
         **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions`` ...).
 
     Example:
@@ -380,6 +400,7 @@ class FakeBase(WorldBase):
         dock: Pose2D = (-1.9, 0.0, 0.0),
         obstacles: Iterable[tuple[float, float, float, float]] = (),
         start: Pose2D | None = None,
+        sensors: Iterable[Sensor] = SENSORS,
         **options: Any,
     ) -> None:
         control_rate = finite(
@@ -388,48 +409,13 @@ class FakeBase(WorldBase):
             positive=True,
             must="a positive number of ticks per second",
         )
-        super().__init__(**options)
-        self.world: FakeWorld = FakeWorld(room=room, dock=dock, obstacles=obstacles, start=start)
-        self.ticks = 0
-        self._period = 1.0 / control_rate
-        self._controllers = Controllers()
-        self._timer: asyncio.TimerHandle | None = None
-        self._start_time = 0.0
-        self.poses.add_frame_provider(FakeFrames(self.world))
-
-    # -- the DriveBase seam (velocity, odometry and map pose: the world's) --
+        world = FakeWorld(room=room, dock=dock, obstacles=obstacles, start=start, sensors=sensors)
+        fake = FakeBackend(world, period=1.0 / control_rate)
+        super().__init__(backend=fake, **options)
+        self.fake = fake
+        self.world = world
 
     @property
-    def control_period(self) -> float:
-        """Seconds between control ticks (``1 / control_rate``)."""
-        return self._period
-
-    async def control(self, step: Callable[[], bool]) -> None:
-        """Call ``step()`` after every control tick until it returns True."""
-        await self._controllers.control(step)
-
-    # -- ticking ----------------------------------------------------------
-
-    async def _start(self) -> None:
-        await super()._start()
-        loop = asyncio.get_running_loop()
-        self.state.update(self.world.read_sensors())
-        self.ticks, self._start_time = 0, loop.time()
-        self._timer = loop.call_at(self._start_time + self._period, self._tick, loop)
-
-    async def _stop(self) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
-        self.stop()
-        self._controllers.cancel()
-        await super()._stop()
-
-    def _tick(self, loop: asyncio.AbstractEventLoop) -> None:
-        self.ticks += 1
-        self._timer = loop.call_at(
-            self._start_time + (self.ticks + 1) * self._period, self._tick, loop
-        )
-        self.world.step(self._period)
-        self.state.update(self.world.read_sensors())
-        self._controllers.run()
+    def ticks(self) -> int:
+        """Control ticks since the robot last started."""
+        return self.fake.ticks

@@ -1,0 +1,80 @@
+"""Profiles: both ends of a topic convert through one table: what one sends, the other reads."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+from ros2_support import require_rclpy
+
+require_rclpy()
+
+from builtin_interfaces.msg import Time  # noqa: E402
+
+from pyrobots_aio.motion import SENSORS  # noqa: E402
+from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry, Profile, Ros2Robot  # noqa: E402
+
+STAMP = Time(sec=12, nanosec=500_000_000)
+STATE = {
+    "bumper": True,
+    "bumper_left": False,
+    "bumper_right": True,
+    **{s.key: 0.125 for s in SENSORS if s.key.startswith("ir_")},
+    "ir_left": 0.4,  # nothing in range: +inf on the wire, the reach again on the robot
+    **{s.key: False for s in SENSORS if s.key.startswith("cliff_")},
+    "cliff_side_left": True,
+    "docked": False,
+    "battery": 0.75,
+}
+
+
+def test_every_standard_sensor_topic_reads_back_what_it_sent() -> None:
+    topics = STANDARD.sensors(SENSORS)
+    assert [t.keys for t in topics] == [(s.key,) for s in SENSORS]
+    read: dict[str, object] = {}
+    for topic in topics:
+        message = topic.encode(topic.message_class(), STATE, STAMP)
+        read.update(topic.decode(message))
+    assert read == {key: value for key, value in STATE.items() if key != "battery"}
+    ray = next(t for t in topics if t.role == "ir_left")
+    sent = ray.encode(ray.message_class(), STATE, STAMP)
+    assert (sent.range, sent.header.frame_id, sent.header.stamp) == (math.inf, "ir_left", STAMP)
+
+
+def test_the_command_and_the_odometry_read_back_what_they_sent() -> None:
+    command, odometry = STANDARD.command, STANDARD.odometry
+    assert command.decode(command.encode(command.message_class(), (0.25, -0.5), STAMP)) == (
+        0.25,
+        -0.5,
+    )
+    sent = Odometry((1.0, -2.0, 0.5), 0.2, 0.1)
+    message = odometry.encode(odometry.message_class(), sent, STAMP)
+    assert (message.header.frame_id, message.child_frame_id) == ("odom", "base_link")
+    read = odometry.decode(message)
+    assert read.pose == pytest.approx(sent.pose)
+    assert (read.v, read.w, read.stamp) == (0.2, 0.1, 12.5)
+
+
+def test_the_battery_status_reads_back_what_it_sent() -> None:
+    [battery] = STANDARD.status
+    message = battery.encode(battery.message_class(), STATE, STAMP)
+    assert message.power_supply_status == message.POWER_SUPPLY_STATUS_DISCHARGING
+    assert battery.decode(message) == {"battery": 0.75}
+
+
+def test_a_second_profile_sits_beside_the_standard_one_and_names_the_topics() -> None:
+    assert PROFILES == {"standard": STANDARD}
+    renamed = dataclasses.replace(
+        STANDARD,
+        name="renamed",
+        command=dataclasses.replace(STANDARD.command, name="base/cmd_vel"),
+    )
+    assert isinstance(renamed, Profile)
+    robot = Ros2Robot(profile=renamed, sensors=[])
+    assert robot.ros.topics == {"cmd_vel": "base/cmd_vel", "odom": "odom"}
+    assert Ros2Robot(profile="standard").ros.topics == {
+        "cmd_vel": "cmd_vel",
+        "odom": "odom",
+        **{s.key: s.key for s in SENSORS},
+    }
