@@ -240,9 +240,9 @@ class Robot(StateMethods, EmergencyStop):
         The stack unwinds in reverse, each step even if the one before was
         cancelled (it finishes its bounded wait, then re-raises): the monitors,
         then the actions (children before parents), the backend, the extensions
-        and the live view, the state's loop, to_thread's idle threads, the loop watchdog (it sees the
-        whole exit) and the signals last. A start that fails unwinds what
-        started before it.
+        and the live view, the state's loop, ``to_thread``'s idle threads, the
+        loop watchdog (it sees the whole exit) and the signals last. A start
+        that fails unwinds what started before it.
         """
         if self.handle_signals:
             stack.enter_context(SignalStop())
