@@ -1,4 +1,4 @@
-"""Untrusted recordings (issue 16): escaped everywhere on the page, safe and bounded to read.
+"""Untrusted recordings (issues 16 and 26): escaped everywhere, safe and bounded to read.
 
 The crafted files are written in the version 1 format (state samples as
 ``state.sample`` events), which this library still reads, so that the same
@@ -7,19 +7,40 @@ tests run against the code before the fixes and fail there.
 
 from __future__ import annotations
 
+import asyncio
 import html.parser
 import json
 import re
 import tracemalloc
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import pytest
 
-from pyrobots_aio import CorruptRecordingError
-from pyrobots_aio.recording import format_summary, load, render_timeline_html, summarize
+from pyrobots_aio import (
+    ActionSpawned,
+    ActionStarted,
+    CorruptRecordingError,
+    ExecEvent,
+    MonitorFired,
+    ResourceAcquired,
+    Robot,
+    action,
+)
+from pyrobots_aio.recording import (
+    JsonlRecorder,
+    Recording,
+    RecordingHeader,
+    format_summary,
+    load,
+    render_timeline_html,
+    summarize,
+)
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
     from pathlib import Path
+
+T = TypeVar("T")
 
 HOSTILE = "x\"><script>alert(1)</script><img src=x onerror=alert(2)>'&"
 """Breaks out of an attribute (either quote), then of the text: a script and a handler."""
@@ -29,6 +50,8 @@ TAGS = {
     "pattern",
 }  # fmt: skip
 CLASS = re.compile(r"^[a-z_][a-z0-9_ -]*$")
+DEEP = 1500
+"""Nested actions: deeper than Python's recursion limit."""
 
 
 def _header(**fields: Any) -> dict[str, Any]:
@@ -184,3 +207,176 @@ def test_memory_follows_the_events_not_the_time_span(tmp_path: Path) -> None:
     assert (sum(summary.actions_per_minute), sum(summary.events_per_minute)) == (1, 1)
     assert "1.0 actions" not in format_summary(summary)  # per minute over 1e18 s: 0.0
     assert page.count('<rect class="rate-actions"') <= 60
+
+
+@action
+async def nest(robot: Robot, depth: int) -> int:
+    return 1 + (await nest(robot, depth - 1) if depth > 1 else 0)
+
+
+def test_the_library_s_own_recording_of_a_deep_action_tree_is_drawn(tmp_path: Path) -> None:
+    path = tmp_path / "deep.jsonl"
+
+    async def main() -> int:
+        robot = Robot()
+        with JsonlRecorder(path).attach(robot):
+            async with robot:
+                return await nest(robot, DEEP)
+
+    assert asyncio.run(main()) == DEEP  # runs fine; the replay died with RecursionError
+    recording = load(path)
+    summary = summarize(recording)
+    page = render_timeline_html(recording)
+    assert (summary.actions, summary.outcomes.succeeded) == (DEEP, DEEP)
+    assert page.count('<rect class="action succeeded"') == DEEP
+    assert page.count(">nest x1</text>") == DEEP  # one row per level
+
+
+def test_coordinates_beyond_reach_are_drawn_at_its_edge(tmp_path: Path) -> None:
+    path = tmp_path / "far.jsonl"
+    plan = [
+        {"name": "far", "shape": "box", "x": 1e308, "y": 0, "half": [1e308, 1]},
+        {"name": "wide", "shape": "circle", "x": 0, "y": 0, "radius": 1e308},
+        {"name": "wall", "shape": "box", "x": 0, "y": 0, "half": [1, 1]},
+    ]
+    samples = [
+        {"t": 0.0, "state": {"v": 1e308, "w": -1e308}, "pose": [1e308, -1e308, 0.0]},
+        {"t": 1.0, "state": {"v": -1e308, "w": 1e308}, "pose": [-1e308, 1e308, 0.0]},
+    ]
+    _write(path, _header(floor_plan=plan), *samples, end=2.0)
+    page = render_timeline_html(load(path))  # was ZeroDivisionError
+    assert not re.search(r'[=", ](-?inf|nan)\b', page)
+    assert page.count('<polygon class="shape') == 1  # the wall; the others are beyond reach
+    track = re.search(r'data-track="([^"]*)"', page)
+    assert track is not None
+    assert track.group(1) == (
+        "0.000,1000000000.0000,-1000000000.0000;1.000,-1000000000.0000,1000000000.0000"
+    )
+    plots = re.findall(r'<polyline class="plot" points="([^"]*)" data-key="(\w)"', page)
+    assert [key for _, key in plots] == ["v", "w"]
+    for points, key in plots:  # from one edge of the plot to the other
+        y = [float(point.split(",")[1]) for point in points.split()]
+        assert (y[0], y[2] - y[0], y[3]) == (y[1], 40.0 if key == "v" else -40.0, y[2])
+
+
+@pytest.mark.parametrize(
+    ("header", "record", "line", "problem"),
+    [
+        (
+            {"t0": -1.7e308},
+            _event(1.7e308, "monitor.fired", None, "m"),
+            1,
+            "bad header: 't0' is out of range: -1.7e+308 (loop times are within ±1e+18 s)",
+        ),
+        (
+            {},
+            _event(1.7e308, "monitor.fired", None, "m"),
+            2,
+            "'t' is out of range: 1.7e+308 (loop times are within ±1e+18 s)",
+        ),
+        (
+            {},
+            {"t": -1e19, "state": {"v": 1.0}},
+            2,
+            "'t' is out of range: -1e+19 (loop times are within ±1e+18 s)",
+        ),
+    ],
+)
+def test_loop_times_beyond_the_range_are_a_clear_error(
+    tmp_path: Path, header: dict[str, Any], record: dict[str, Any], line: int, problem: str
+) -> None:
+    path = tmp_path / "far.jsonl"
+    _write(path, _header(**header), record, end=1.0)
+    with pytest.raises(CorruptRecordingError) as info:
+        load(path)
+    assert str(info.value) == f"{path}:{line}: {problem}"
+
+
+def test_an_end_beyond_the_range_is_a_clear_error(tmp_path: Path) -> None:
+    path = tmp_path / "far.jsonl"
+    _write(path, _header(), end=1.7e308)
+    with pytest.raises(CorruptRecordingError) as info:
+        load(path)
+    assert str(info.value) == (
+        f"{path}:2: 'end' is out of range: 1.7e+308 (loop times are within ±1e+18 s)"
+    )
+
+
+def test_lone_surrogates_are_escaped_in_the_report_and_the_page(tmp_path: Path) -> None:
+    path = tmp_path / "odd.jsonl"
+    run = [
+        _event(0.0, "action.spawned", 1, "\ud800", parent=None),
+        _event(0.5, "resource.acquired", 1, "\ud800", resources=["\udc00"], leaves=["\udc00"]),
+        _event(1.0, "action.finished", 1, "\ud800", outcome="failed", error="\udfff"),
+    ]
+    plan = [{"name": "\ud800", "shape": "box", "x": 0, "y": 0, "half": [1, 1]}]
+    _write(path, _header(robot="\ud800", floor_plan=plan), *run)
+    recording = load(path)
+    report = format_summary(summarize(recording))
+    page = render_timeline_html(recording, title="\ud800")
+    for text in (report, page):
+        text.encode("utf-8")  # was UnicodeEncodeError
+    assert report.startswith("\\ud800: 9.000 s recorded")
+    assert "1.000 s  \\ud800#1: \\udfff" in report
+    assert "<title>\\ud800</title>" in page
+    assert "\\udc00" in page
+
+
+class _Compared:
+    """How often the values of `_counted` classes were compared."""
+
+    times = 0
+
+
+def _counted(base: type[T]) -> type[T]:
+    """A subclass of ``base`` whose values count their comparisons in `_Compared`."""
+
+    def counting(name: str) -> Callable[[object, object], object]:
+        compare = getattr(base, name)
+
+        def counted(self: object, other: object) -> object:
+            _Compared.times += 1
+            return compare(self, other)
+
+        return counted
+
+    names = ("__eq__", "__lt__", "__le__", "__gt__", "__ge__")
+    methods = {name: counting(name) for name in names}
+    return type(f"Counted{base.__name__}", (base,), {"__hash__": base.__hash__, **methods})
+
+
+_Name = _counted(str)
+_Time = _counted(float)
+MANY = 2000
+"""Enough for quadratic work (``MANY**2 / 2`` comparisons) to stand out from n log n."""
+
+
+def test_statistics_of_many_resources_and_monitors_take_near_linear_work() -> None:
+    names = [_Name(f"r{i}") for i in range(MANY)]
+    events: list[ExecEvent] = [
+        ActionSpawned(0.0, 1, "grab", None),
+        ActionStarted(0.0, 1, "grab"),
+        ResourceAcquired(0.0, 1, "grab", tuple(names), tuple(names), 0),
+        *(MonitorFired(1.0, None, name, None, "v", "becomes=True", True, "none") for name in names),
+    ]
+    recording = Recording(RecordingHeader(t0=0.0), tuple(events), end=2.0)
+    _Compared.times = 0
+    summary = summarize(recording)
+    page = render_timeline_html(recording)
+    assert (len(summary.resources), summary.resources[0].held) == (MANY, 2.0)
+    assert page.count('<rect class="hold"') == MANY
+    assert page.count('<line class="firing"') == MANY
+    assert _Compared.times < 60 * MANY  # sorting and hashing; was 4 * MANY**2 / 2 and more
+
+
+def test_drawing_many_overlapping_actions_takes_near_linear_work() -> None:
+    events: list[ExecEvent] = []
+    for i in range(1, MANY + 1):
+        time = _Time(i / 1000)
+        events += [ActionSpawned(time, i, "walk", None), ActionStarted(time, i, "walk")]
+    recording = Recording(RecordingHeader(t0=0.0), tuple(events), end=_Time(10.0))
+    _Compared.times = 0
+    page = render_timeline_html(recording)
+    assert page.count('<rect class="action not_done"') == MANY
+    assert f">walk (lane {MANY})</text>" in page  # none ends: each takes a lane of its own
+    assert _Compared.times < 20 * MANY  # finding a lane: was MANY**2 / 2

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
-from pyrobots_aio import RecordingError, Robot
+from pyrobots_aio import CorruptRecordingError, RecordingError, Robot
 from pyrobots_aio.recording import (
     JsonlRecorder,
     McapRecorder,
@@ -258,3 +258,19 @@ async def test_a_truncated_mcap_is_read_up_to_where_it_stops(tmp_path: Path) -> 
     assert 0 < len(partial.poses) < len(whole.poses)
     with pytest.raises(RecordingError):
         load(cut)
+
+
+def test_a_valid_mcap_that_is_not_a_recording_is_refused(tmp_path: Path) -> None:
+    from mcap.writer import Writer
+
+    path = tmp_path / "other.mcap"
+    with path.open("wb") as file:
+        writer = Writer(file)
+        writer.start()
+        writer.finish()  # no pyrobots_aio metadata, no messages: was AttributeError
+    for strict in (True, False):
+        with pytest.raises(CorruptRecordingError) as info:
+            load(path, strict=strict)
+        assert str(info.value) == (
+            f"{path}:1: no pyrobots_aio metadata record: not a pyrobots_aio recording"
+        )

@@ -3,8 +3,10 @@
 JSON Lines and MCAP recordings give the same summary and page. A corrupt or
 truncated recording is still summarised up to the bad line; the error, naming
 that line, follows the summary and the exit code is 1. The recording is
-untrusted input: its strings are printed with control characters escaped,
-and ``--timeline`` may not name the recording itself.
+untrusted input: its strings (and the paths given) are printed with control
+characters and lone surrogates escaped, and ``--timeline`` may not name the
+recording itself. What is not a regular file (a FIFO, ``/dev/zero``) is
+refused with one line and exit code 1, like a file that cannot be read.
 """
 
 from __future__ import annotations
@@ -51,11 +53,11 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run ``replay``; return the exit code."""
     if options.timeline and _same_file(options.path, options.timeline):
-        print(
-            f"pyrobots-aio: error: --timeline {options.timeline} names the recording itself; "
-            "writing the page there would destroy it: choose another file, e.g. run.html",
-            file=err,
+        problem = (
+            f"--timeline {shown(options.timeline)} names the recording itself; writing the "
+            "page there would destroy it: choose another file, e.g. run.html"
         )
+        print(f"pyrobots-aio: error: {problem}", file=err)
         return 2
     try:
         recording = load(options.path, strict=False)
@@ -63,16 +65,17 @@ def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         print(f"pyrobots-aio: error: {shown(exc)}", file=err)
         return 1
     except OSError as exc:
-        print(f"pyrobots-aio: error: cannot read {options.path}: {exc.strerror}", file=err)
+        print(f"pyrobots-aio: error: cannot read {shown(options.path)}: {exc.strerror}", file=err)
         return 1
     print(format_summary(summarize(recording)), file=out)
     if options.timeline:
         try:
             Path(options.timeline).write_text(render_timeline_html(recording), encoding="utf-8")
         except OSError as exc:
-            print(f"pyrobots-aio: error: cannot write {options.timeline}: {exc.strerror}", file=err)
+            problem = f"cannot write {shown(options.timeline)}: {exc.strerror}"
+            print(f"pyrobots-aio: error: {problem}", file=err)
             return 1
-        print(f"\ntimeline written to {options.timeline}", file=out)
+        print(f"\ntimeline written to {shown(options.timeline)}", file=out)
     if recording.error is not None:
         print(
             f"pyrobots-aio: error: {shown(recording.error)}\n"

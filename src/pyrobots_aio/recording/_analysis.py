@@ -228,6 +228,35 @@ def analyse(recording: Recording) -> Analysis:
     return found
 
 
+@dataclass(slots=True)
+class ResourceUse:
+    """What happened to one plain resource: its holds, waits and preemptions, in order."""
+
+    holds: list[Interval] = field(default_factory=list)
+    waits: list[Interval] = field(default_factory=list)
+    preemptions: list[ResourcePreempted] = field(default_factory=list)
+
+
+def by_resource(found: Analysis) -> dict[str, ResourceUse]:
+    """The use of each resource held or waited for, names sorted (one pass over each list)."""
+    uses: dict[str, ResourceUse] = {}
+    for interval in found.holds:
+        _use(uses, interval.resource).holds.append(interval)
+    for interval in found.waits:
+        _use(uses, interval.resource).waits.append(interval)
+    for event in found.preemptions:
+        if (use := uses.get(event.resource)) is not None:
+            use.preemptions.append(event)
+    return dict(sorted(uses.items()))
+
+
+def _use(uses: dict[str, ResourceUse], name: str) -> ResourceUse:
+    use = uses.get(name)
+    if use is None:
+        use = uses[name] = ResourceUse()
+    return use
+
+
 def held_time(holds: list[Interval], stop: float) -> float:
     """Seconds during which at least one of ``holds`` (of one resource) was held."""
     edges = sorted(

@@ -21,13 +21,16 @@ def _seconds(value: float | None) -> str:
 
 _CONTROLS = {c: f"\\x{c:02x}" for c in [*range(0x20), *range(0x7F, 0xA0)]}
 _CONTROLS.update({0x2028: "\\u2028", 0x2029: "\\u2029"})
+_CONTROLS.update({c: f"\\u{c:04x}" for c in range(0xD800, 0xE000)})  # lone surrogates
 
 
 def shown(text: object) -> str:
     r"""``text`` safe for a terminal: control characters (escape sequences, newlines) escaped.
 
     Every string taken from a recording goes through this, so that a crafted
-    recording cannot move the cursor, recolour the terminal or forge lines.
+    recording cannot move the cursor, recolour the terminal or forge lines;
+    lone surrogates (``"\ud800"``, valid JSON but no text) are escaped too,
+    since they cannot be written out as UTF-8.
 
     Example:
         >>> shown("drive\x1b[2J")

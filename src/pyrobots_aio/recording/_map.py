@@ -8,13 +8,19 @@ the pose of their moment. Everything is in pixels: ``data-ox``, ``data-oy``
 and ``data-scale`` on the ``svg.map`` give the map frame back
 (``x = (px - ox) / scale``, ``y = (oy - py) / scale``), and ``data-track``
 holds the path as ``t,x,y`` triples for the page's hover script.
+
+Coordinates are drawn within `REACH` of the origin: a pose beyond (a
+simulation that blew up, a crafted file) is drawn at that distance, and a
+floor-plan shape beyond is left out like any malformed shape, so that the
+map's arithmetic stays finite (a pose at 1e308 m would make the scale 0).
 """
 
 from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass
+from array import array
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from . import _svg
@@ -24,7 +30,7 @@ if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping, Sequence
 
     from ._analysis import Analysis
-    from ._recording import Recording
+    from ._recording import PoseTrack, Recording
 
 SIZE = 560
 """Pixels of the longer side of the arena."""
@@ -33,6 +39,8 @@ STEP_PX = 1.5
 """The path keeps a point once it is this many pixels from the last one kept."""
 MAX_TRACK = 3000
 """Most ``t,x,y`` triples given to the hover script."""
+REACH = 1e9
+"""Metres from the origin drawn (see the module notes)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,9 +53,19 @@ class Mark:
 
 
 def _number(value: object) -> float | None:
-    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+    """``value`` as a float within `REACH`, else None."""
+    if isinstance(value, int | float) and not isinstance(value, bool) and abs(value) <= REACH:
         return float(value)
     return None
+
+
+def _within_reach(poses: PoseTrack) -> PoseTrack:
+    """``poses`` with each coordinate brought within `REACH` of the origin."""
+
+    def near(values: Sequence[float]) -> array[float]:
+        return array("d", [min(REACH, max(-REACH, value)) for value in values])
+
+    return replace(poses, x=near(poses.x), y=near(poses.y))
 
 
 def _shape(raw: Mapping[str, Any]) -> dict[str, Any] | None:
@@ -274,6 +292,7 @@ def _track(recording: Recording, kept: list[int]) -> str:
 def render_map(recording: Recording, found: Analysis) -> str:
     """The map's SVG, or "" when the recording has neither a floor plan nor poses."""
     shapes = [s for raw in recording.header.floor_plan if (s := _shape(raw)) is not None]
+    recording = replace(recording, poses=_within_reach(recording.poses))
     extent = _extent(shapes, recording)
     if extent is None:
         return ""

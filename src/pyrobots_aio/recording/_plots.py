@@ -74,10 +74,10 @@ def draw_plot(series: Series, scale: Scale, top: float, stop: float) -> list[str
     if not points:
         return parts
     low, high = min(v for _, v in points), max(v for _, v in points)
-    span = high - low or 1.0
+    half_span = high / 2 - low / 2 or 1.0  # halves: from -1e308 to 1e308 is no number
 
     def y(value: float) -> float:
-        return top + PLOT_H - (value - low) / span * PLOT_H
+        return top + PLOT_H - (value / 2 - low / 2) / half_span * PLOT_H
 
     parts.append(_axis(top, low, high))
     steps: list[str] = []

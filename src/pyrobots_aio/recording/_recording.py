@@ -24,9 +24,12 @@ a recording without it was not closed (the program crashed or is still
 running). Version 1 files (state samples as ``state.sample`` events) are read
 too.
 
-Reading is safe on untrusted files: numbers must be finite (``NaN``,
-``Infinity`` and ``1e400`` are refused), nesting is bounded, and the memory
-used grows with the number of records, not with the time span.
+Reading is safe on untrusted files: only a regular file is read (not a
+FIFO, which would block, nor a device like ``/dev/zero``, which never ends),
+a record (a line; an MCAP record) is at most `MAX_RECORD` bytes, numbers must
+be finite (``NaN``, ``Infinity`` and ``1e400`` are refused), loop times within
+`MAX_TIME` seconds of 0, nesting is bounded, and the memory used grows with
+the number of records, not with the time span.
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ from __future__ import annotations
 import json
 import math
 import os
+import reprlib
+import stat
 from array import array
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -49,6 +54,7 @@ from pyrobots_aio import (
 
 if TYPE_CHECKING:
     from collections.abc import Generator, Iterator, Mapping, Sequence
+    from typing import BinaryIO
 
 FORMAT = "pyrobots_aio.recording"
 """The ``format`` field of a recording's header line."""
@@ -60,20 +66,55 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 """How an MCAP file starts (`McapRecorder` writes them)."""
 _MAX_DIGITS = 40
 """Longest integer literal read: far beyond any count or time, far below float overflow."""
+MAX_RECORD = 64 * 1024 * 1024
+"""Longest record read, in bytes: a line of JSON Lines, an MCAP record (other than a chunk).
+
+A recorded line holds one event or one sample of the state (kilobytes; a
+camera image as a list of numbers, a few megabytes)."""
+MAX_TIME = 1e18
+"""Largest loop time read, in seconds either side of 0 (30 billion years): far beyond any
+run, and far enough below float overflow that the span between two times is a number."""
 
 
 class _Bad(Exception):
     """A problem with one line; `load` turns it into `CorruptRecordingError`."""
 
 
+_BRIEF = reprlib.Repr()
+_BRIEF.maxstring = _BRIEF.maxother = 80
+
+
+def brief(value: object) -> str:
+    """``repr(value)`` cut short (long strings, long or deep lists): errors stay one short line."""
+    return _BRIEF.repr(value)
+
+
 def _number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def loop_time(value: object, name: str = "t") -> float:
+    """``value`` as a loop time (a number within `MAX_TIME`); else `ValueError` naming ``name``."""
+    if not isinstance(value, int | float) or isinstance(value, bool):
+        raise ValueError(f"{name!r} must be a number (the loop time), got {brief(value)}")
+    if not -MAX_TIME <= value <= MAX_TIME:
+        msg = f"{name!r} is out of range: {brief(value)} (loop times are within ±{MAX_TIME:g} s)"
+        raise ValueError(msg)
+    return float(value)
+
+
+def _start(obj: Mapping[str, Any]) -> float | None:
+    t0 = obj.get("t0")
+    try:
+        return None if t0 is None else loop_time(t0, "t0")
+    except ValueError as exc:
+        raise _Bad(str(exc)) from None
 
 
 def _optional(obj: Mapping[str, Any], key: str, kind: type | tuple[type, ...]) -> Any:
     value = obj.get(key)
     if value is not None and (not isinstance(value, kind) or isinstance(value, bool)):
-        raise _Bad(f"{key!r} must be {getattr(kind, '__name__', kind)} or null, got {value!r}")
+        raise _Bad(f"{key!r} must be {getattr(kind, '__name__', kind)} or null, got {brief(value)}")
     return value
 
 
@@ -174,19 +215,19 @@ class RecordingHeader:
             if keys is not None and (
                 not isinstance(keys, list) or not all(isinstance(k, str) for k in keys)
             ):
-                raise _Bad(f"'state_keys' must be a list of strings or null, got {keys!r}")
+                raise _Bad(f"'state_keys' must be a list of strings or null, got {brief(keys)}")
             metadata = obj.get("metadata") or {}
             if not isinstance(metadata, dict):
-                raise _Bad(f"'metadata' must be an object, got {metadata!r}")
+                raise _Bad(f"'metadata' must be an object, got {brief(metadata)}")
             plan = obj.get("floor_plan") or []
             if not isinstance(plan, list) or not all(isinstance(s, dict) for s in plan):
-                raise _Bad(f"'floor_plan' must be a list of objects, got {plan!r}")
+                raise _Bad(f"'floor_plan' must be a list of objects, got {brief(plan)}")
             return cls(
                 version=obj.get("version", VERSION),
                 created=_optional(obj, "created", str),
                 robot=_optional(obj, "robot", str),
                 seed=_optional(obj, "seed", int),
-                t0=_optional(obj, "t0", (int, float)),
+                t0=_start(obj),
                 state_keys=None if keys is None else tuple(keys),
                 sample_rate=_optional(obj, "sample_rate", (int, float)),
                 pose_frame=_optional(obj, "pose_frame", str),
@@ -307,10 +348,10 @@ def event_from_json(obj: object) -> ExecEvent:
         name_of_kind = obj.get("kind")
         kind = _KINDS.get(name_of_kind) if isinstance(name_of_kind, str) else None
         if kind is None:
-            raise _Bad(f"unknown event kind {name_of_kind!r}; known kinds: {sorted(_KINDS)}")
+            raise _Bad(f"unknown event kind {brief(name_of_kind)}; known kinds: {sorted(_KINDS)}")
         data = obj.get("data") or {}
         if not isinstance(data, dict):
-            raise _Bad(f"'data' must be an object, got {data!r}")
+            raise _Bad(f"'data' must be an object, got {brief(data)}")
         ident = _optional(obj, "action", int)
         name = _optional(obj, "name", str)
         return event_from_data(kind, t, ident, name, data)
@@ -319,15 +360,15 @@ def event_from_json(obj: object) -> ExecEvent:
 
 
 def _time(obj: Mapping[str, Any]) -> float:
-    t = obj.get("t")
-    if not isinstance(t, int | float) or isinstance(t, bool):
-        raise _Bad(f"'t' must be a number (the loop time), got {t!r}")
-    return float(t)
+    try:
+        return loop_time(obj.get("t"))
+    except ValueError as exc:
+        raise _Bad(str(exc)) from None
 
 
 def _pose(value: object) -> tuple[float, float, float]:
     if not (isinstance(value, list) and len(value) == 3 and all(_number(v) for v in value)):
-        raise _Bad(f"'pose' must be [x, y, yaw] numbers, got {value!r}")
+        raise _Bad(f"'pose' must be [x, y, yaw] numbers, got {brief(value)}")
     return float(value[0]), float(value[1]), float(value[2])
 
 
@@ -369,16 +410,20 @@ def parse_json(text: str | bytes) -> Any:
         raise ValueError("not valid JSON: nested too deeply") from None
 
 
-def _lines(path: str) -> Generator[tuple[int, str, bool], None, None]:
+def _lines(path: str, file: BinaryIO) -> Generator[tuple[int, str, bool], None, None]:
     """Each line's number, text, and whether it ended with a newline."""
-    with open(path, "rb") as file:
-        for number, raw in enumerate(file, start=1):
-            try:
-                text = raw.decode("utf-8")
-            except UnicodeDecodeError as exc:
-                msg = f"not UTF-8 text (byte {exc.start + 1} of the line)"
-                raise CorruptRecordingError(path, number, msg) from None
-            yield number, text, text.endswith("\n")
+    number = 0
+    while raw := file.readline(MAX_RECORD + 1):
+        number += 1
+        if len(raw) > MAX_RECORD and not raw.endswith(b"\n"):
+            msg = f"a line longer than {MAX_RECORD} bytes (the most read): not a recording?"
+            raise CorruptRecordingError(path, number, msg)
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            msg = f"not UTF-8 text (byte {exc.start + 1} of the line)"
+            raise CorruptRecordingError(path, number, msg) from None
+        yield number, text, text.endswith("\n")
 
 
 def _parse(path: str, number: int, text: str, complete: bool) -> Any:
@@ -407,7 +452,7 @@ def read_header(path: str, obj: object, line: int = 1) -> RecordingHeader:
     version = obj.get("version")
     if not isinstance(version, int) or isinstance(version, bool) or version > VERSION:
         msg = (
-            f"{path}: recorded in format version {version!r}; this pyrobots_aio reads "
+            f"{path}: recorded in format version {brief(version)}; this pyrobots_aio reads "
             f"versions up to {VERSION}: upgrade pyrobots-aio to read it"
         )
         raise RecordingError(msg)
@@ -427,10 +472,10 @@ def _header(path: str, lines: Iterator[tuple[int, str, bool]]) -> RecordingHeade
 def _end(obj: dict[str, Any], count: int) -> float | None:
     end, events = obj.get("end"), obj.get("events")
     if end is not None and not _number(end):
-        raise _Bad(f"end record: 'end' must be a number or null, got {end!r}")
+        raise _Bad(f"end record: 'end' must be a number or null, got {brief(end)}")
     if events != count:
-        raise _Bad(f"end record counts {events!r} records but {count} were read before it")
-    return None if end is None else float(end)
+        raise _Bad(f"end record counts {brief(events)} records but {count} were read before it")
+    return None if end is None else loop_time(end, "end")
 
 
 @dataclass
@@ -460,7 +505,7 @@ class _Body:
         t = _time(obj)
         state = obj.get("state") or {}
         if not isinstance(state, dict):
-            raise _Bad(f"'state' must be an object, got {state!r}")
+            raise _Bad(f"'state' must be an object, got {brief(state)}")
         pose = obj.get("pose")
         if pose is not None:
             self.samples.add_pose(t, *_pose(pose))
@@ -486,9 +531,40 @@ def _body(path: str, lines: Iterator[tuple[int, str, bool]], body: _Body) -> Non
             raise CorruptRecordingError(path, number, str(exc)) from None
 
 
-def _is_mcap(path: str) -> bool:
-    with open(path, "rb") as file:
-        return file.read(len(MCAP_MAGIC)) == MCAP_MAGIC
+_KINDS_OF_FILE = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+_NONBLOCK = getattr(os, "O_NONBLOCK", 0)
+
+
+def _open_regular(path: str) -> BinaryIO:
+    """``path`` opened for reading, if it is a regular file.
+
+    It is opened without blocking (a FIFO would block the opening until a
+    writer comes) and refused unless it is a regular file: a FIFO or a device
+    (``/dev/zero``) can be endless.
+
+    Raises:
+        RecordingError: It is not a regular file.
+        OSError: It cannot be opened.
+    """
+    fd = os.open(path, os.O_RDONLY | _NONBLOCK)
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = next((name for test, name in _KINDS_OF_FILE if test(mode)), "something else")
+            msg = f"{path}: not a regular file but {kind}: a recording is a file"
+            raise RecordingError(msg)
+        if _NONBLOCK:
+            os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
 
 
 def load(path: str | os.PathLike[str], *, strict: bool = True) -> Recording:
@@ -505,7 +581,8 @@ def load(path: str | os.PathLike[str], *, strict: bool = True) -> Recording:
             and the 1-based line number (``.path``, ``.line``; for MCAP, the
             message's position).
         RecordingError: The file was written by a newer format version, or is
-            MCAP and the ``mcap`` package is missing.
+            MCAP and the ``mcap`` package is missing, or is not a regular file
+            (a FIFO, a device).
         OSError: The file cannot be opened.
 
     Example:
@@ -514,23 +591,26 @@ def load(path: str | os.PathLike[str], *, strict: bool = True) -> Recording:
         (61.3, 2210)
     """
     name = os.fspath(path)
-    if _is_mcap(name):
-        from ._mcap_read import load_mcap
+    with _open_regular(name) as file:
+        if file.read(len(MCAP_MAGIC)) == MCAP_MAGIC:
+            from ._mcap_read import load_mcap
 
-        return load_mcap(name, strict=strict)
-    lines = _lines(name)
+            return load_mcap(name, file, strict=strict)
+        file.seek(0)
+        return _load_lines(name, file, strict=strict)
+
+
+def _load_lines(name: str, file: BinaryIO, *, strict: bool) -> Recording:
+    lines = _lines(name, file)
+    header = _header(name, lines)
+    body = _Body(SeriesBuilder())
+    error = None
     try:
-        header = _header(name, lines)
-        body = _Body(SeriesBuilder())
-        error = None
-        try:
-            _body(name, lines, body)
-        except CorruptRecordingError as exc:
-            if strict:
-                raise
-            error = exc
-    finally:
-        lines.close()
+        _body(name, lines, body)
+    except CorruptRecordingError as exc:
+        if strict:
+            raise
+        error = exc
     samples, poses = body.samples.build(header.pose_frame)
     end = None if error is not None else body.end
     return Recording(header, tuple(body.events), end, name, error, samples, poses)

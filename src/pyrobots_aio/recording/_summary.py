@@ -15,7 +15,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from ._analysis import NOT_DONE, Analysis, Span, analyse, held_time
+from ._analysis import NOT_DONE, Analysis, Span, analyse, by_resource, held_time
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
@@ -227,17 +227,18 @@ def _action_stats(name: str, spans: list[Span]) -> ActionStats:
 
 
 def _resource_stats(found: Analysis, recording: Recording) -> list[ResourceStats]:
-    names = sorted({i.resource for i in found.holds} | {i.resource for i in found.waits})
     duration, stop = recording.duration, recording.stop
     stats = []
-    for name in names:
-        holds = [h for h in found.holds if h.resource == name]
-        waits = [w for w in found.waits if w.resource == name]
-        held = held_time(holds, stop)
+    for name, use in by_resource(found).items():
+        held = held_time(use.holds, stop)
+        waits = use.waits
         longest = max(((w.end if w.end is not None else stop) - w.start for w in waits), default=0)
-        preempted = sum(1 for p in found.preemptions if p.resource == name)
         share = held / duration if duration > 0 else 0.0
-        stats.append(ResourceStats(name, held, share, len(holds), len(waits), longest, preempted))
+        stats.append(
+            ResourceStats(
+                name, held, share, len(use.holds), len(waits), longest, len(use.preemptions)
+            )
+        )
     return stats
 
 

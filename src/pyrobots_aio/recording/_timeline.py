@@ -27,12 +27,13 @@ attributes included, and only plain words become class names.
 
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 from . import _svg
-from ._analysis import NOT_DONE, Analysis, Interval, Pause, Span, analyse
+from ._analysis import NOT_DONE, Analysis, Interval, Pause, Span, analyse, by_resource
 from ._chart import rate_chart
 from ._format import paused
 from ._map import colour_bar, render_map
@@ -42,6 +43,8 @@ from ._svg import AXIS_H, BAR_H, ROW_H, WIDTH, Scale, cursor_marks, esc, timed_a
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Sequence
+
+    from pyrobots_aio import MonitorFired
 
     from ._recording import Recording
 
@@ -175,27 +178,40 @@ def _tree(found: Analysis) -> _Node:
 
 
 def _walk(node: _Node) -> Iterable[_Node]:
-    for child in node.children.values():  # insertion order: first spawned first
+    """The rows under ``node``, depth first, children in insertion order (first spawned first).
+
+    A loop, not recursion: a recorded tree can be thousands of actions deep.
+    """
+    stack = list(reversed(node.children.values()))
+    while stack:
+        child = stack.pop()
         yield child
-        yield from _walk(child)
+        stack.extend(reversed(child.children.values()))
 
 
 def _lanes(
     items: Sequence[T], begin: Callable[[T], float], end: Callable[[T], float]
 ) -> list[list[T]]:
-    """Pack intervals into lanes so that no two in a lane overlap (first fit, by start)."""
+    """Pack intervals into lanes so that no two in a lane overlap.
+
+    Each interval, by start, goes to the first lane free at its start (first
+    fit); two heaps find that lane in log time however many lanes there are:
+    the lanes in use by when they are free, and the free lanes by number.
+    """
     lanes: list[list[T]] = []
-    free_at: list[float] = []
+    busy: list[tuple[float, int]] = []
+    free: list[int] = []
     for item in sorted(items, key=begin):
         b = begin(item)
-        for i, t in enumerate(free_at):
-            if t <= b:
-                lanes[i].append(item)
-                free_at[i] = end(item)
-                break
+        while busy and busy[0][0] <= b:
+            heapq.heappush(free, heapq.heappop(busy)[1])
+        if free:
+            lane = heapq.heappop(free)
         else:
-            lanes.append([item])
-            free_at.append(end(item))
+            lane = len(lanes)
+            lanes.append([])
+        lanes[lane].append(item)
+        heapq.heappush(busy, (end(item), lane))
     return lanes
 
 
@@ -414,41 +430,38 @@ def _interval_rows(
 
 
 def _draw_resources(canvas: _Canvas) -> None:
-    found = canvas.found
-    names = sorted({i.resource for i in found.holds} | {i.resource for i in found.waits})
-    if not names:
+    uses = by_resource(canvas.found)
+    if not uses:
         return
     canvas.section("resources")
-    for name in names:
+    for name, use in uses.items():
         top = canvas.y
-        holds = [h for h in found.holds if h.resource == name]
-        if holds:
-            _interval_rows(canvas, holds, "hold", "held by", name)
+        if use.holds:
+            _interval_rows(canvas, use.holds, "hold", "held by", name)
         else:
             canvas.parts.append(_svg.label(name, canvas.y, 1))
             canvas.y += ROW_H
-        for event in found.preemptions:
-            if event.resource == name:
-                x = canvas.scale.x(event.time)
-                canvas.parts.append(
-                    f'<path class="preempt" d="M{x - 5:.1f},{top:.1f} h10 l-5,7 z">'
-                    f"<title>{esc(event.reason)}</title></path>"
-                )
-        waits = [w for w in found.waits if w.resource == name]
-        if waits:
-            _interval_rows(canvas, waits, "wait", "awaited by", "waiting")
+        for event in use.preemptions:
+            x = canvas.scale.x(event.time)
+            canvas.parts.append(
+                f'<path class="preempt" d="M{x - 5:.1f},{top:.1f} h10 l-5,7 z">'
+                f"<title>{esc(event.reason)}</title></path>"
+            )
+        if use.waits:
+            _interval_rows(canvas, use.waits, "wait", "awaited by", "waiting")
 
 
 def _draw_firings(canvas: _Canvas) -> None:
-    names = sorted({e.name or "?" for e in canvas.found.firings})
-    if not names:
+    by_name: dict[str, list[MonitorFired]] = {}
+    for event in canvas.found.firings:
+        by_name.setdefault(event.name or "?", []).append(event)
+    if not by_name:
         return
     canvas.section("monitor firings")
-    for name in names:
+    for name in sorted(by_name):
         canvas.parts.append(_svg.label(name, canvas.y, 1))
-        for event in canvas.found.firings:
-            if (event.name or "?") == name:
-                canvas.tick("firing", event.time, f"{name} fired at {canvas.rel(event.time)} s")
+        for event in by_name[name]:
+            canvas.tick("firing", event.time, f"{name} fired at {canvas.rel(event.time)} s")
         canvas.y += ROW_H
 
 
@@ -574,7 +587,8 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
         waits ``rect.wait``, monitor firings ``line.firing``; on the map
         (``svg.map``), the path is ``polyline.trail`` and the marks
         ``path.mark``; the sensor plots are ``polyline.plot`` and
-        ``polygon.plot.bool``.
+        ``polygon.plot.bool``. Lone surrogates from the recording are
+        spelled out as backslash escapes, so that the page can be written as UTF-8.
 
     Example:
         >>> from pyrobots_aio.recording import load, render_timeline_html
@@ -591,7 +605,7 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
     heading = page_title(recording, title)
     arena = render_map(recording, found)
     where = ["<h2>Where the robot went</h2>", _map_legend(recording), arena] if arena else []
-    return "\n".join(
+    page = "\n".join(
         [
             "<!DOCTYPE html>",
             '<html lang="en"><head><meta charset="utf-8">',
@@ -610,3 +624,5 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
             "",
         ]
     )
+    # A lone surrogate ("\ud800": valid JSON, not text) cannot be written as UTF-8: spelled out.
+    return page.encode("utf-8", "backslashreplace").decode("utf-8")
