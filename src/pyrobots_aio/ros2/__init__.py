@@ -16,6 +16,10 @@ running inside ``async with robot``:
   state, the goal's result is the action's result;
 - ``/diagnostics`` reports whether the watched state is fresh.
 
+`build_interfaces` builds the interface packages PyPI lacks (``tf2_msgs``,
+``irobot_create_msgs``) from the definitions pyrobots_aio carries, into this
+environment (``pyrobots-aio ros2 interfaces build``; the ``ros2-build`` extra).
+
 `Ros2Robot` is a `pyrobots_aio.motion.DriveBase` over standard messages
 (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock ``Bool``): the motion
 actions and the random walk run on it as on the simulator.
@@ -26,6 +30,11 @@ A program beside a ``sim-node --rate R`` runs at its pace with
 """
 
 from ._diagnostics import staleness as staleness
+from ._interfaces import InterfaceBuild as InterfaceBuild
+from ._interfaces import InterfaceOutcome as InterfaceOutcome
+from ._interfaces import build_interfaces as build_interfaces
+from ._interfaces import interface_packages as interface_packages
+from ._interfaces import missing_tools as missing_tools
 from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
 from ._rclpy import qos_profile as qos_profile
@@ -42,12 +51,17 @@ __all__ = [
     "CLIFF_SENSORS",
     "DOCK_IN_ODOM",
     "IR_SENSORS",
+    "InterfaceBuild",
+    "InterfaceOutcome",
     "Ros2Node",
     "Ros2Publisher",
     "Ros2Robot",
     "Ros2Subscription",
     "ToState",
     "attach_ros2",
+    "build_interfaces",
+    "interface_packages",
+    "missing_tools",
     "qos_profile",
     "ros_name",
     "staleness",
