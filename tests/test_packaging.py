@@ -12,6 +12,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ("arena.xml", "robot.xml", "scene.xml")
+MODELS_IN_WHEEL = "pyrobots_aio/models/"
+INTERFACES = ROOT / "src" / "pyrobots_aio" / "ros2" / "interfaces"
 
 
 @pytest.fixture(scope="module")
@@ -43,12 +45,22 @@ def test_the_wheel_is_pure_python_for_any_platform(wheel: Path) -> None:
 
 def test_the_wheel_ships_the_models(wheel: Path) -> None:
     with zipfile.ZipFile(wheel) as archive:
-        shipped = sorted(name for name in archive.namelist() if name.endswith(".xml"))
-        assert shipped == [f"pyrobots_aio/models/{name}" for name in MODELS]
+        shipped = sorted(name for name in archive.namelist() if name.startswith(MODELS_IN_WHEEL))
+        assert shipped == [f"{MODELS_IN_WHEEL}{name}" for name in MODELS]
         for name in MODELS:
             assert (
                 archive.read(f"pyrobots_aio/models/{name}") == (ROOT / "models" / name).read_bytes()
             )
+
+
+def test_the_wheel_ships_the_interface_definitions(wheel: Path) -> None:
+    """What ``pyrobots-aio ros2 interfaces build`` builds from: every file, as in the tree."""
+    carried = sorted(p for p in INTERFACES.rglob("*") if p.is_file())
+    assert len(carried) > 30
+    with zipfile.ZipFile(wheel) as archive:
+        for path in carried:
+            name = f"pyrobots_aio/{path.relative_to(INTERFACES.parent.parent).as_posix()}"
+            assert archive.read(name) == path.read_bytes()
 
 
 FIND_MODELS = """

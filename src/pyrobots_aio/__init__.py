@@ -51,6 +51,7 @@ from ._exceptions import EmergencyStopError as EmergencyStopError
 from ._exceptions import EventLoopError as EventLoopError
 from ._exceptions import GoalError as GoalError
 from ._exceptions import GoalRejectedError as GoalRejectedError
+from ._exceptions import InterfaceBuildError as InterfaceBuildError
 from ._exceptions import InvalidConditionError as InvalidConditionError
 from ._exceptions import InvalidPoseError as InvalidPoseError
 from ._exceptions import InvalidResourceError as InvalidResourceError
@@ -148,6 +149,7 @@ __all__ = [
     "GoalRejectedError",
     "HealthMonitor",
     "Instrument",
+    "InterfaceBuildError",
     "InvalidConditionError",
     "InvalidPoseError",
     "InvalidResourceError",

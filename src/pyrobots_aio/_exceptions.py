@@ -37,8 +37,9 @@ PyRobotsError
     ├── Ros2UnavailableError      rclpy is not installed (also an ImportError)
     ├── Ros2NameError             a name ROS 2 rejects, with its reason (also a ValueError)
     ├── TopicTypeError            a topic that carries another type (also a TypeError)
-    └── GoalError                 a ROS 2 goal that did not succeed (.status)
-        └── GoalRejectedError     the action server refused the goal
+    ├── GoalError                 a ROS 2 goal that did not succeed (.status)
+    │   └── GoalRejectedError     the action server refused the goal
+    └── InterfaceBuildError       interface packages that cannot be built (what is missing)
 ```
 
 `ActionCancelled` is not in this tree: it *is* `asyncio.CancelledError`
@@ -385,3 +386,7 @@ class GoalError(Ros2Error):
 
 class GoalRejectedError(GoalError):
     """The action server refused the goal."""
+
+
+class InterfaceBuildError(Ros2Error):
+    """Interface packages that cannot be built: the tools missing, each with its fix, or the log."""

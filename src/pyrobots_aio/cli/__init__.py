@@ -7,6 +7,7 @@ Commands::
     pyrobots-aio demo random-walk [--duration SECONDS] [--realtime] [--record PATH] [--seed N]
     pyrobots-aio replay PATH [--timeline OUT.html]
     pyrobots-aio sim-node [--namespace NS] [--rate FACTOR] ...
+    pyrobots-aio ros2 interfaces build [PACKAGE ...]
 
 The library never configures logging; a program calls `install_console_handler`
 to see its records, coloured, with the time since start and the running action.

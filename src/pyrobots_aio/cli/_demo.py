@@ -100,6 +100,11 @@ def seed(text: str) -> int:
     return _integer(text, 0, None, "a non-negative integer")
 
 
+def count(text: str) -> int:
+    """Argparse type: a positive integer."""
+    return _integer(text, 1, None, "a positive integer")
+
+
 def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``random-walk`` to the ``demo`` sub-commands."""
     walk = demos.add_parser(

@@ -19,7 +19,7 @@ from typing import TextIO
 
 from pyrobots_aio import PyRobotsError, __version__
 
-from . import _demo, _replay, _sim_node
+from . import _demo, _interfaces, _replay, _sim_node
 from ._console import install_console_handler
 
 INTERRUPTED = 128 + signal.SIGINT
@@ -48,6 +48,7 @@ def parser() -> argparse.ArgumentParser:
     demos = demo.add_subparsers(title="demos", metavar="DEMO", required=True)
     _demo.add_parser(demos)
     _sim_node.add_parser(commands)
+    _interfaces.add_parser(commands)
     return top
 
 

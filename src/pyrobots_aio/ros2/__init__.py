@@ -22,6 +22,10 @@ conversions, used by ``pyrobots-aio sim-node`` as well. `STANDARD` is the
 standard messages' (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock
 ``Bool``); the motion actions and the random walk run on it as on the simulator.
 
+`build_interfaces` builds the interface packages PyPI lacks (``tf2_msgs``,
+``irobot_create_msgs``) from the definitions pyrobots_aio carries, into this
+environment (``pyrobots-aio ros2 interfaces build``; the ``ros2-build`` extra).
+
 Layer: above ``sim`` (which it does not import) and below ``cli``, on the public API only.
 A program beside a ``sim-node --rate R`` runs at its pace with
 `pyrobots_aio.loops.run_scaled`.
@@ -30,6 +34,11 @@ A program beside a ``sim-node --rate R`` runs at its pace with
 from ._backend import DOCK_IN_ODOM as DOCK_IN_ODOM
 from ._backend import Ros2Backend as Ros2Backend
 from ._diagnostics import staleness as staleness
+from ._interfaces import InterfaceBuild as InterfaceBuild
+from ._interfaces import InterfaceOutcome as InterfaceOutcome
+from ._interfaces import build_interfaces as build_interfaces
+from ._interfaces import interface_packages as interface_packages
+from ._interfaces import missing_tools as missing_tools
 from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
 from ._profiles import PROFILES as PROFILES
@@ -49,6 +58,8 @@ __all__ = [
     "DOCK_IN_ODOM",
     "PROFILES",
     "STANDARD",
+    "InterfaceBuild",
+    "InterfaceOutcome",
     "Odometry",
     "Profile",
     "Ros2Backend",
@@ -59,6 +70,9 @@ __all__ = [
     "ToState",
     "Topic",
     "attach_ros2",
+    "build_interfaces",
+    "interface_packages",
+    "missing_tools",
     "profile_named",
     "qos_profile",
     "ros_name",
