@@ -47,6 +47,20 @@ def test_the_extension_picks_the_format_and_both_replay_alike(tmp_path: Path) ->
         done = _demo("--duration", "20", "--seed", "4", "--record", str(tmp_path / name))
         assert done.returncode == 0, done.stderr
         runs[name] = load(tmp_path / name)
+        notes = [line for line in done.stdout.splitlines() if str(tmp_path / name) in line]
+        hint = (
+            f"recorded to {tmp_path / name}; see its timeline with: pyrobots-aio replay "
+            f"{tmp_path / name} --timeline {tmp_path / 'walk.html'}"
+        )
+        if name == "walk.mcap":  # the quiet seconds of closing and reading back are announced
+            assert notes == [
+                f"closing {tmp_path / name}: compressing the last chunk and writing the MCAP "
+                "index and summary",
+                f"reading {tmp_path / name} back for its summary",
+                hint,
+            ]
+        else:
+            assert notes == [hint]
     mcap = (tmp_path / "walk.mcap").read_bytes()
     assert mcap.startswith(b"\x89MCAP0\r\n")
     with (tmp_path / "walk.mcap").open("rb") as file:
