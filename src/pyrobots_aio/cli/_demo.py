@@ -37,6 +37,7 @@ from pyrobots_aio.recording import (
 from pyrobots_aio.robot import SignalStop, stop_on_signals
 
 from ._live import EventLines, LiveStatus, Progress, Tally
+from ._paths import unwritable
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterator
@@ -285,6 +286,11 @@ def _report(report: WalkReport, wall: float, *, realtime: bool) -> str:
 
 def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run the demo; return the exit code."""
+    record = options.record
+    problem = unwritable("--record", record, f"walk{Path(record).suffix}") if record else None
+    if problem is not None:  # before the simulation: a typo costs no run
+        print(f"pyrobots-aio: error: {problem}", file=err)
+        return 2
     from pyrobots_aio.sim import run  # first: without the sim extra, fail before writing files
 
     recorder = _recorder(options)
