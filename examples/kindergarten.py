@@ -248,8 +248,15 @@ async def main(
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--minutes", type=int, default=68)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--minutes", type=int, default=68, help="simulated minutes of the session (default: 68)"
+    )
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seeds the session's random events and the simulator (default: 0)",
+    )
     parser.add_argument("--cap", type=int, default=SAFETY_CAP, help="the safety cap (max_actions)")
     options = parser.parse_args()
     install_console_handler(logging.WARNING)  # INFO would log each of the session's bumps

@@ -28,6 +28,7 @@ import random
 import subprocess
 import sys
 
+from pyrobots_aio import PyRobotsError
 from pyrobots_aio.cli import install_console_handler
 from pyrobots_aio.loops import run_scaled
 from pyrobots_aio.ros2 import Ros2Robot
@@ -42,23 +43,35 @@ async def main(namespace: str, moves: int, seed: int) -> WalkReport:
 
 
 def start_sim_node(namespace: str, rate: float) -> subprocess.Popen[str]:
-    """``pyrobots-aio sim-node`` in a subprocess, once it says it is ready."""
+    """``pyrobots-aio sim-node`` in a subprocess, once it says it is ready.
+
+    Raises:
+        SystemExit: The sim-node ended before it was ready (it said why, on standard error).
+    """
     node = subprocess.Popen(
         [*COMMAND, "--namespace", namespace, "--rate", str(rate)],
         stdout=subprocess.PIPE,
         text=True,
     )
     assert node.stdout is not None
-    print(node.stdout.readline().strip(), flush=True)
+    ready = node.stdout.readline().strip()
+    if not ready:  # its own error is above: no robot to drive
+        code = node.wait()
+        raise SystemExit(f"random_walk_ros2.py: error: the sim-node did not start (exit {code})")
+    print(ready, flush=True)
     return node
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--namespace", default="/robot1")
-    parser.add_argument("--rate", type=float, default=4.0, help="the sim-node's rate")
-    parser.add_argument("--moves", type=int, default=5)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--namespace", default="/robot1", help="the robot's ROS 2 namespace (default: /robot1)"
+    )
+    parser.add_argument(
+        "--rate", type=float, default=4.0, help="the sim-node's rate (default: 4, 4x real time)"
+    )
+    parser.add_argument("--moves", type=int, default=5, help="random moves made (default: 5)")
+    parser.add_argument("--seed", type=int, default=0, help="seeds the moves (default: 0)")
     parser.add_argument("--external", action="store_true", help="drive a sim-node of your own")
     options = parser.parse_args()
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
@@ -68,6 +81,8 @@ if __name__ == "__main__":
     sim_node = None if options.external else start_sim_node(options.namespace, options.rate)
     try:
         report = run_scaled(main, options.namespace, options.moves, options.seed, rate=options.rate)
+    except PyRobotsError as error:  # rclpy missing, a bad namespace: one line, no traceback
+        raise SystemExit(f"random_walk_ros2.py: error: {error}") from None
     finally:
         if sim_node is not None:
             sim_node.terminate()

@@ -45,11 +45,14 @@ def test_the_demo_runs_records_and_summarises(
     )
     assert done.returncode == 0, done.stderr
     out = done.stdout.splitlines()
-    # not a terminal: one plain line per notable event, while it runs
-    assert out[:2] == [
-        "    0.000  start    undock#1",
-        "    0.000  start    drive_distance#2 under undock#1",
+    # not a terminal: a line of counters every 10 simulated seconds while it runs, no more
+    progress = out[: out.index(next(line for line in out if line.startswith("random walk: ")))]
+    assert progress[0] == "   10.000  progress 6 actions, 0 cancelled, 0 failed, 0 monitor firings"
+    assert [line[:19] for line in progress] == [
+        f"{10.0 * n:9.3f}  progress" for n in range(1, len(progress) + 1)
     ]
+    assert len(progress) == 8  # 82.82 s
+    assert not any("  start    " in line for line in out)
     assert not any("\x1b[" in line for line in out)
 
     recording = load(path)
@@ -79,7 +82,7 @@ def test_the_demo_runs_records_and_summarises(
     assert format_summary(summary) in done.stdout
     assert done.stdout.endswith(
         f"recorded to {path}; see its timeline with: pyrobots-aio replay {path} "
-        "--timeline run.html\n"
+        f"--timeline {tmp_path / 'walk.html'}\n"
     )
 
     # the same seed, in-process this time: the very same run
@@ -133,6 +136,35 @@ def test_without_record_the_summary_comes_from_memory(capsys: pytest.CaptureFixt
     assert "SimRobot, seed 2: " in out
     assert "closed cleanly" in out
     assert "recorded to" not in out
+
+
+def test_verbose_prints_a_line_per_action_instead_of_progress(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["-q", "demo", "random-walk", "--duration", "5", "--seed", "2", "-v"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[:3] == [
+        "    0.000  start    undock#1",
+        "    0.000  start    drive_distance#2 under undock#1",
+        "    2.380  succeeded drive_distance#2",
+    ]
+    assert not any(" progress " in line for line in out)
+    # the command's -v (debug logs) asks for them too
+    assert main(["-v", "demo", "random-walk", "--duration", "5", "--seed", "2"]) == 0
+    assert "    0.000  start    undock#1" in capsys.readouterr().out.splitlines()
+
+
+def test_by_default_progress_lines_tick_in_simulated_time(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["-q", "demo", "random-walk", "--duration", "5", "--seed", "2"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    report = next(i for i, line in enumerate(out) if line.startswith("random walk: "))
+    simulated = float(out[report].split("; ")[1].split(" s simulated")[0])
+    assert [line.split("  progress ")[0] for line in out[:report]] == [
+        f"{10.0 * n:9.3f}" for n in range(1, int(simulated // 10) + 1)
+    ]
+    assert all(" actions, " in line and " cancelled, " in line for line in out[:report])
 
 
 def _on_a_terminal(args: list[str]) -> tuple[int, str]:

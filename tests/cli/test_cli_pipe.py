@@ -37,9 +37,18 @@ def test_the_demo_into_a_closed_pipe_stops_in_order_and_quietly(tmp_path: Path) 
     # Before: a logged traceback per event line ("instrument ... failed"), the run going
     # on unseen to its end, then "[Errno 32] Broken pipe".
     path = tmp_path / "walk.jsonl"
-    done = _into_a_closed_pipe(["demo", "random-walk", "--record", str(path)])
+    done = _into_a_closed_pipe(["demo", "random-walk", "-v", "--record", str(path)])
     assert (done.returncode, done.stderr) == (141, b"")
     recording = load(path)
     assert recording.complete  # stopped at its first line, and closed in order
     outcomes = [e.data["outcome"] for e in recording.events if e.kind.value == "action.finished"]
     assert outcomes == ["cancelled", "cancelled"]  # undock and its drive, not run to their end
+
+
+def test_the_demo_stops_at_its_first_progress_line_into_a_closed_pipe(tmp_path: Path) -> None:
+    path = tmp_path / "walk.jsonl"
+    done = _into_a_closed_pipe(["demo", "random-walk", "--record", str(path)])
+    assert (done.returncode, done.stderr) == (141, b"")
+    recording = load(path)
+    assert recording.complete
+    assert recording.duration < 10.1  # the first progress line comes at 10 s

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import re
 import signal
 import struct
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING
 import pytest
 import websockets
 
+from pyrobots_aio.cli import main
 from pyrobots_aio.recording import load, summarize
 
 if TYPE_CHECKING:
@@ -47,6 +49,20 @@ def test_the_extension_picks_the_format_and_both_replay_alike(tmp_path: Path) ->
         done = _demo("--duration", "20", "--seed", "4", "--record", str(tmp_path / name))
         assert done.returncode == 0, done.stderr
         runs[name] = load(tmp_path / name)
+        notes = [line for line in done.stdout.splitlines() if str(tmp_path / name) in line]
+        hint = (
+            f"recorded to {tmp_path / name}; see its timeline with: pyrobots-aio replay "
+            f"{tmp_path / name} --timeline {tmp_path / 'walk.html'}"
+        )
+        if name == "walk.mcap":  # the quiet seconds of closing and reading back are announced
+            assert notes == [
+                f"closing {tmp_path / name}: compressing the last chunk and writing the MCAP "
+                "index and summary",
+                f"reading {tmp_path / name} back for its summary",
+                hint,
+            ]
+        else:
+            assert notes == [hint]
     mcap = (tmp_path / "walk.mcap").read_bytes()
     assert mcap.startswith(b"\x89MCAP0\r\n")
     with (tmp_path / "walk.mcap").open("rb") as file:
@@ -105,3 +121,54 @@ def test_serve_streams_the_run_live(tmp_path: Path) -> None:
     first = got["/pyrobots/actions"][0]  # whatever the walk was doing when the client came
     assert str(first["kind"]).startswith("action.")
     assert first["name"] in {"undock", "drive_distance", "move", "rotate_angle"}
+
+
+def _refused(capsys: pytest.CaptureFixture[str], *args: str) -> str:
+    """Run the demo in-process with ``args``; it must fail at once: exit 2, one line, no output."""
+    assert main(["demo", "random-walk", *args]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""  # no progress line: the simulation never started
+    assert err.count("\n") == 1
+    return err
+
+
+def test_a_record_path_in_a_missing_directory_is_refused_before_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Before: "[Errno 2] No such file or directory: ..." after 2.4 s of simulation.
+    path = tmp_path / "nodir" / "x.jsonl"
+    assert _refused(capsys, "--record", str(path)) == (
+        f"pyrobots-aio: error: --record {path}: the directory {tmp_path / 'nodir'} does not "
+        "exist: create it first, or choose another\n"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_record_path_that_is_a_directory_is_refused_before_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Before: "[Errno 21] Is a directory: ..." after 2.4 s of simulation.
+    path = tmp_path / "somedir.jsonl"
+    path.mkdir()
+    assert _refused(capsys, "--record", str(path)) == (
+        f"pyrobots-aio: error: --record {path} is a directory: name a file, "
+        f"e.g. {path / 'walk.jsonl'}\n"
+    )
+    assert list(path.iterdir()) == []
+
+
+def test_a_record_path_in_a_directory_one_may_not_write_is_refused_before_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The tests may run as root, whom permissions do not stop: the check is what is tested.
+    path = tmp_path / "x.mcap"
+    monkeypatch.setattr(os, "access", lambda *_args, **_kwargs: False)
+    assert _refused(capsys, "--record", str(path)) == (
+        f"pyrobots-aio: error: --record {path}: the directory {tmp_path} may not be written "
+        "(permission denied): choose another\n"
+    )
+    path.touch()
+    assert _refused(capsys, "--record", str(path)) == (
+        f"pyrobots-aio: error: --record {path}: the file may not be overwritten "
+        "(permission denied)\n"
+    )

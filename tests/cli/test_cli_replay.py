@@ -132,6 +132,26 @@ def test_replay_refuses_to_write_the_page_over_the_recording(recording: Path) ->
     assert recording.read_bytes() == before
 
 
+def test_replay_refuses_a_page_that_is_not_html_or_cannot_be_written(
+    recording: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Before: --timeline out.txt wrote HTML into out.txt without a word.
+    where = recording.parent
+    refusals = {
+        "out.txt": f"--timeline {where / 'out.txt'}: the page is HTML, its name should end in "
+        f".html, e.g. {where / 'out.html'}",
+        "nodir/run.html": f"--timeline {where / 'nodir/run.html'}: the directory "
+        f"{where / 'nodir'} does not exist: create it first, or choose another",
+        "pages.html": f"--timeline {where / 'pages.html'} is a directory: name a file, e.g. "
+        f"{where / 'pages.html/run.html'}",
+    }
+    (where / "pages.html").mkdir()
+    for name, problem in refusals.items():
+        assert main(["replay", str(recording), "--timeline", str(where / name)]) == 2
+        assert capsys.readouterr() == ("", f"pyrobots-aio: error: {problem}\n")
+    assert sorted(p.name for p in where.iterdir()) == [recording.name, "pages.html"]
+
+
 def test_replay_prints_no_terminal_escape_from_a_recording(tmp_path: Path) -> None:
     evil = "\x1b]0;owned\x07\x1b[2J\x1b[31m"
     path = tmp_path / "evil.jsonl"

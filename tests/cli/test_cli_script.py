@@ -48,8 +48,7 @@ def test_the_readme_demo_and_replay_run_as_written(tmp_path: Path) -> None:
     summary = format_summary(summarize(recording))
     assert f"\n{summary}\n" in done.stdout
     assert done.stdout.endswith(
-        f"recorded to {record}; see its timeline with: pyrobots-aio replay {record} "
-        "--timeline run.html\n"
+        f"recorded to {record}; see its timeline with: {' '.join(replay)}\n"
     )
 
     shown = _run(replay[1:], tmp_path)

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
     from pyrobots_aio.recording import Recording
 
-DEMO = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk", "--realtime"]
+DEMO = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk", "--realtime", "-v"]
 AT_ONCE = 4
 """Processes run side by side."""
 

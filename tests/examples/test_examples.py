@@ -3,6 +3,8 @@ from __future__ import annotations
 import ast
 import importlib.util
 import math
+import os
+import subprocess
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -230,3 +232,62 @@ async def test_kindergarten_safety_cap_refuses_and_counts() -> None:
     assert session.events_per_minute * 2 == session.refused["giggle"] + session.refused["cry"]
     assert (session.actions_per_minute, session.peak_actions_per_minute) == (1.5, 3)
     assert (session.events_per_minute, session.peak_events_per_minute) == (7.5, 12)
+
+
+NO_RCLPY = """
+import sys
+
+
+class NoRclpy:
+    def find_spec(self, name, path=None, target=None):
+        if name.partition(".")[0] == "rclpy":
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
+
+sys.meta_path.insert(0, NoRclpy())
+"""
+
+
+@pytest.mark.parametrize("external", [False, True])
+def test_random_walk_ros2_without_rclpy_says_so_without_a_traceback(
+    tmp_path: Path, external: bool
+) -> None:
+    # Before: the clean error, then a 48-line traceback. The sitecustomize hides rclpy
+    # from the example and from the sim-node it starts.
+    (tmp_path / "sitecustomize.py").write_text(NO_RCLPY)
+    path = os.pathsep.join(p for p in (str(tmp_path), os.environ.get("PYTHONPATH")) if p)
+    done = subprocess.run(
+        [sys.executable, str(EXAMPLES / "random_walk_ros2.py"), *(["--external"] * external)],
+        env={**os.environ, "PYTHONPATH": path, "ROS_DOMAIN_ID": "0"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    needs = (
+        "the ROS 2 bridge needs rclpy, which cannot be imported (No module named 'rclpy'); "
+        'install the ROS 2 Python wheels with: pip install "pyrobots-aio[ros2]", or source a '
+        "ROS 2 install"
+    )
+    assert (done.returncode, done.stdout) == (1, "")
+    if external:
+        assert done.stderr == f"random_walk_ros2.py: error: {needs}\n"
+    else:  # the sim-node says why it did not start, the example that it did not
+        assert done.stderr == (
+            f"pyrobots-aio: error: {needs}\n"
+            "random_walk_ros2.py: error: the sim-node did not start (exit 1)\n"
+        )
+
+
+@pytest.mark.parametrize("name", ["kindergarten", "random_walk_ros2"])
+def test_every_option_of_an_example_has_help(name: str) -> None:
+    tree = ast.parse((EXAMPLES / f"{name}.py").read_text())
+    options = [
+        node
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and ast.unparse(node.func).endswith(".add_argument")
+    ]
+    assert options
+    assert [
+        ast.unparse(o.args[0]) for o in options if "help" not in {k.arg for k in o.keywords}
+    ] == []

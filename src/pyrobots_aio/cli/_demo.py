@@ -2,8 +2,9 @@
 
 Lockstep virtual time by default (`pyrobots_aio.sim.run`: as fast as the CPU
 allows), or ``--realtime`` on an ordinary loop. While it runs: a live block on
-a terminal, one line per notable event otherwise, and with ``--serve`` a live
-view in Foxglove. At the end: the walk's report and the summary of its
+a terminal, otherwise a line of counters every ten simulated seconds (with
+``-v``, a line per action started and finished and per notable event instead),
+and with ``--serve`` a live view in Foxglove. At the end: the walk's report and the summary of its
 recording (the file of ``--record``, JSON Lines or MCAP by its extension, else
 an in-memory recording). Every state key and the pose are recorded at the
 control rate.
@@ -35,10 +36,11 @@ from pyrobots_aio.recording import (
 )
 from pyrobots_aio.robot import SignalStop, stop_on_signals
 
-from ._live import EventLines, LiveStatus, Tally
+from ._live import EventLines, LiveStatus, Progress, Tally
+from ._paths import unwritable
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Coroutine
+    from collections.abc import Callable, Coroutine, Iterator
     from typing import Any
 
     from pyrobots_aio import Robot
@@ -53,6 +55,8 @@ DEFAULT_PORT = 8765
 """The port of ``--serve`` without a number (Foxglove's default)."""
 DEFAULT_MOVES = 10
 """Moves made when no ``--duration`` is given."""
+PROGRESS = 10.0
+"""Simulated seconds between progress lines (not on a terminal, without ``-v``)."""
 
 
 def positive_seconds(text: str) -> float:
@@ -144,6 +148,15 @@ def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
         f"(default {DEFAULT_PORT}; the live extra); use it with --realtime to watch it",
     )
     walk.add_argument(
+        "-v",
+        "--verbose",
+        dest="per_action",
+        action="store_true",
+        help="print a line per action started and finished and per notable event "
+        f"(default: a line of counters every {PROGRESS:g} simulated seconds; on a terminal, "
+        "a live block)",
+    )
+    walk.add_argument(
         "--seed", type=seed, default=0, help="seeds the sensors and the moves (default: 0)"
     )
     walk.set_defaults(command=run_random_walk)
@@ -152,7 +165,7 @@ def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
 class _Show:
     """How the run is shown: a live block on a terminal, event lines otherwise."""
 
-    def __init__(self, out: TextIO, handler: ConsoleHandler) -> None:
+    def __init__(self, out: TextIO, handler: ConsoleHandler, *, per_action: bool) -> None:
         self.tally = Tally()
         self.handler = handler
         self.wall_start = time.perf_counter()  # for the speed-up shown; never used for timing
@@ -160,13 +173,17 @@ class _Show:
         self._out = out
         self._saved = handler.stream, handler.start
         self.pipe_closed = False
+        self.progress: Progress | None = None
+        self.events: EventLines | None
         if out.isatty():
             self.live: LiveStatus | None = LiveStatus(out, self._headline)
             self.events = EventLines(self.live.line, 0.0, verbose=False)
             handler.stream = self.live  # log lines scroll above the block
         else:
             self.live = None
-            self.events = EventLines(self._print, 0.0, verbose=True)
+            self.events = EventLines(self.note, 0.0, verbose=True) if per_action else None
+            if not per_action:
+                self.progress = Progress(self.note, self.tally, PROGRESS)
         self._robot: Robot | None = None
         self._task: asyncio.Task[object] | None = None
 
@@ -174,12 +191,15 @@ class _Show:
         self._robot = robot
         self._task = asyncio.current_task()
         # Every time shown counts from the robot's start: event lines, log lines, headline.
-        self.start = self.events.start = asyncio.get_running_loop().time()
+        self.start = asyncio.get_running_loop().time()
         self.handler.start = self.start
         robot.instruments.add(self.tally)
-        robot.instruments.add(self.events)
+        if self.events is not None:
+            self.events.start = self.start
+            robot.instruments.add(self.events)
 
-    def _print(self, line: str) -> None:
+    def note(self, line: str) -> None:
+        """Write one line (an event's, progress, the command's own) unless the pipe closed."""
         if self.pipe_closed:
             return
         try:
@@ -190,7 +210,11 @@ class _Show:
                 self._task.cancel("the output pipe was closed")
 
     def showing(self, robot: Robot) -> contextlib.AbstractAsyncContextManager[None]:
-        return self.live.showing(robot) if self.live is not None else contextlib.nullcontext()
+        if self.live is not None:
+            return self.live.showing(robot)
+        if self.progress is not None:
+            return self.progress.showing(self.start)
+        return contextlib.nullcontext()
 
     def _headline(self) -> str:
         robot, t = self._robot, self.tally
@@ -210,9 +234,26 @@ def _recorder(options: argparse.Namespace) -> Recorder[Sink]:
     metadata = {"demo": "random-walk"}
     if not options.record:
         return MemoryRecorder(metadata=metadata)
-    if Path(options.record).suffix.lower() == ".mcap":
+    if _is_mcap(options):
         return McapRecorder(options.record, metadata=metadata, logs=True)
     return JsonlRecorder(options.record, metadata=metadata)
+
+
+def _is_mcap(options: argparse.Namespace) -> bool:
+    return bool(options.record) and Path(options.record).suffix.lower() == ".mcap"
+
+
+@contextlib.contextmanager
+def _closing_note(options: argparse.Namespace, show: _Show) -> Iterator[None]:
+    """Say what the quiet seconds of closing an MCAP recording are spent on, before them."""
+    try:
+        yield
+    finally:
+        if _is_mcap(options):
+            show.note(
+                f"closing {options.record}: compressing the last chunk and writing the MCAP "
+                "index and summary"
+            )
 
 
 def _walk(
@@ -225,7 +266,7 @@ def _walk(
 
     async def main() -> WalkReport:
         robot = SimRobot(seed=options.seed, realtime=options.realtime, serve=options.serve)
-        with stopping, recorder.attach(robot):
+        with stopping, recorder.attach(robot), _closing_note(options, show):
             async with robot:
                 show.attach(robot)  # times shown count from here, as the recording's do
                 async with show.showing(robot):
@@ -250,10 +291,15 @@ def _report(report: WalkReport, wall: float, *, realtime: bool) -> str:
 
 def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run the demo; return the exit code."""
+    record = options.record
+    problem = unwritable("--record", record, f"walk{Path(record).suffix}") if record else None
+    if problem is not None:  # before the simulation: a typo costs no run
+        print(f"pyrobots-aio: error: {problem}", file=err)
+        return 2
     from pyrobots_aio.sim import run  # first: without the sim extra, fail before writing files
 
     recorder = _recorder(options)
-    show = _Show(out, options.log_handler)
+    show = _Show(out, options.log_handler, per_action=options.per_action or options.verbose)
     stopping = stop_on_signals()
     try:
         main = _walk(options, recorder, show, stopping)
@@ -272,12 +318,15 @@ def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> in
         show.close()
     wall = time.perf_counter() - show.wall_start
     print(_report(report, wall, realtime=options.realtime), file=out)
+    if _is_mcap(options):
+        print(f"reading {options.record} back for its summary", file=out, flush=True)
     recording: Recording
     recording = (
         recorder.recording() if isinstance(recorder, MemoryRecorder) else load(options.record)
     )
     print("", format_summary(summarize(recording)), sep="\n", file=out)
     if options.record:
-        replay = f"pyrobots-aio replay {options.record} --timeline run.html"
+        page = Path(options.record).with_suffix(".html")
+        replay = f"pyrobots-aio replay {options.record} --timeline {page}"
         print(f"\nrecorded to {options.record}; see its timeline with: {replay}", file=out)
     return 0

@@ -2,11 +2,12 @@
 
 `EventLines` is an instrument that turns notable executive events into one
 line each (action started and finished, cancellations with who and why,
-preemptions, monitor firings). `LiveStatus` keeps a block at the bottom of
-the terminal (clock, counters, a few state values, the running action tree)
-and redraws it in place about ten times a (wall-clock) second; lines written
-through it (``LiveStatus.write``, which the console log handler uses) scroll
-above the block.
+preemptions, monitor firings). `Progress` writes one line of counters every
+few simulated seconds instead, for a log that stays short. `LiveStatus`
+keeps a block at the bottom of the terminal (clock, counters, a few state
+values, the running action tree) and redraws it in place about ten times a
+(wall-clock) second; lines written through it (``LiveStatus.write``, which the
+console log handler uses) scroll above the block.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from pyrobots_aio import (
 from ._console import format_time
 
 if TYPE_CHECKING:
-    from collections.abc import AsyncIterator, Callable
+    from collections.abc import AsyncIterator, Callable, Coroutine
 
     from pyrobots_aio import ExecEvent, Robot
 
@@ -97,6 +98,53 @@ class EventLines:
         return None
 
 
+@contextlib.asynccontextmanager
+async def _running(work: Coroutine[None, None, None], name: str) -> AsyncIterator[None]:
+    """Run ``work``, which never ends by itself, as a task while the body runs."""
+    task = asyncio.get_running_loop().create_task(work, name=name)
+    try:
+        yield
+    finally:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+
+class Progress:
+    """One line of counters every ``every`` seconds of loop time, while `showing` runs.
+
+    Args:
+        write: Called with each line (no newline).
+        tally: The counters shown.
+        every: Seconds of loop time (simulated time, in lockstep) between lines.
+    """
+
+    def __init__(self, write: Callable[[str], object], tally: Tally, every: float) -> None:
+        self._write = write
+        self._tally = tally
+        self._every = every
+
+    def line(self, since_start: float) -> str:
+        """The line for ``since_start`` seconds into the run."""
+        t = self._tally
+        return (
+            f"{format_time(since_start)}  progress {t.actions} actions, {t.cancelled} cancelled, "
+            f"{t.failed} failed, {t.firings} monitor firings"
+        )
+
+    def showing(self, start: float) -> contextlib.AbstractAsyncContextManager[None]:
+        """Write the lines, counting from loop time ``start``, while the body runs."""
+        return _running(self._lines(start), "pyrobots-aio progress")
+
+    async def _lines(self, start: float) -> None:
+        loop = asyncio.get_running_loop()
+        due = start
+        while True:
+            due += self._every
+            await asyncio.sleep(due - loop.time())  # to the tick, however late the last line
+            self._write(self.line(due - start))
+
+
 class LiveStatus:
     """The live block at the bottom of a terminal, redrawn in place.
 
@@ -139,15 +187,10 @@ class LiveStatus:
     async def showing(self, robot: Robot) -> AsyncIterator[None]:
         """Keep the block up to date while the ``async with`` body runs; erase it after."""
         self._robot = robot
-        task = asyncio.get_running_loop().create_task(
-            self._refresh(), name="pyrobots-aio live status"
-        )
         try:
-            yield
+            async with _running(self._refresh(), "pyrobots-aio live status"):
+                yield
         finally:
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
             self._erase()
             self._robot = None
             self._stream.flush()

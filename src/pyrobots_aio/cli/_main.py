@@ -1,7 +1,8 @@
 """The ``pyrobots-aio`` command: argument parsing and exit codes.
 
 Exit codes: 0 success, 1 runtime failure (a corrupt recording, an error of the
-library or of the file system), 2 usage error (argparse), 130 interrupted
+library or of the file system), 2 usage error (argparse, or an output path
+that cannot be written, found before any work starts), 130 interrupted
 (Ctrl-C), 141 the output pipe was closed (``| head``: quietly, as for any
 command that SIGPIPE ends), 143 terminated (SIGTERM).
 """

@@ -4,8 +4,9 @@ JSON Lines and MCAP recordings give the same summary and page. A corrupt or
 truncated recording is still summarised up to the bad line; the error, naming
 that line, follows the summary and the exit code is 1. The recording is
 untrusted input: its strings (and the paths given) are printed with control
-characters and lone surrogates escaped, and ``--timeline`` may not name the
-recording itself. What is not a regular file (a FIFO, ``/dev/zero``) is
+characters and lone surrogates escaped, and ``--timeline`` must end in
+``.html`` and be writable, and may not name the recording itself (exit code 2,
+before the recording is read). What is not a regular file (a FIFO, ``/dev/zero``) is
 refused with one line and exit code 1, like a file that cannot be read.
 """
 
@@ -23,6 +24,8 @@ from pyrobots_aio.recording import (
     shown,
     summarize,
 )
+
+from ._paths import unwritable
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -52,11 +55,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run ``replay``; return the exit code."""
-    if options.timeline and _same_file(options.path, options.timeline):
-        problem = (
-            f"--timeline {shown(options.timeline)} names the recording itself; writing the "
-            "page there would destroy it: choose another file, e.g. run.html"
-        )
+    problem = _timeline_problem(options.path, options.timeline) if options.timeline else None
+    if problem is not None:
         print(f"pyrobots-aio: error: {problem}", file=err)
         return 2
     try:
@@ -84,6 +84,21 @@ def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         )
         return 1
     return 0
+
+
+def _timeline_problem(recording: str, page: str) -> str | None:
+    """What is wrong with ``--timeline page``, before the recording is read; None: nothing."""
+    if _same_file(recording, page):
+        return (
+            f"--timeline {shown(page)} names the recording itself; writing the "
+            "page there would destroy it: choose another file, e.g. run.html"
+        )
+    if Path(page).suffix.lower() not in {".html", ".htm"}:
+        return (
+            f"--timeline {shown(page)}: the page is HTML, its name should end in .html, "
+            f"e.g. {shown(Path(page).with_suffix('.html'))}"
+        )
+    return unwritable("--timeline", page, "run.html")
 
 
 def _same_file(recording: str, page: str) -> bool:
