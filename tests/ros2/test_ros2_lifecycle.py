@@ -92,6 +92,20 @@ async def test_a_failed_start_of_the_inner_backend_stops_the_node() -> None:
 
 
 @pytest.mark.asyncio
+async def test_the_exit_ends_even_if_the_executor_s_wake_up_is_lost() -> None:
+    # A loaded machine once lost the wake-up of executor.shutdown(): the ROS thread slept
+    # on in its wait set and the robot's exit joined it forever. Lose it on purpose.
+    before = set(threading.enumerate())
+    robot = Robot()
+    ros2 = attach_ros2(robot, "sleepy")
+    async with robot:
+        executor = ros2._thread._executor
+        executor.shutdown = lambda timeout_sec=None: True  # no wake-up, no shutdown flag
+    assert set(threading.enumerate()) == before
+    assert not ros2.is_running
+
+
+@pytest.mark.asyncio
 async def test_the_domain_comes_from_ros_domain_id_unless_given() -> None:
     first, second = Robot(), Robot()
     attach_ros2(first, "from_env")

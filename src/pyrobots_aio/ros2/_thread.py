@@ -36,6 +36,17 @@ rclpy tells nobody when a service or action server appears (its own
 steady-clock timer, only while a call or a goal waits for its server.
 """
 
+SPIN_BOUND = 0.5
+"""Seconds the ROS thread waits in one spin at most before it looks whether to stop.
+
+`RosThread.stop` wakes the executor (``executor.shutdown``), but on a loaded
+machine that wake-up was once lost: the thread slept on in its wait set, and
+the robot's exit waited for it forever. Looking again this often bounds the
+exit; a node with nothing to do then only goes back to its wait.
+"""
+JOIN_BOUND = 5.0
+"""Seconds the loop waits for the ROS thread to end once its exit was cancelled."""
+
 
 def _settle(
     future: asyncio.Future[Any], result: Any = None, error: BaseException | None = None
@@ -145,8 +156,12 @@ class RosThread:
             return
         try:
             await asyncio.shield(stopped)
-        finally:
-            thread.join()
+        finally:  # cancelled meanwhile: the thread is told to stop, and ends within SPIN_BOUND
+            thread.join(JOIN_BOUND)
+            if thread.is_alive():
+                _log.error(
+                    "the ROS 2 thread of node %s did not end within %s s", self.name, JOIN_BOUND
+                )
             self._thread = None
 
     def _run(self, ready: asyncio.Future[None]) -> None:
@@ -170,9 +185,10 @@ class RosThread:
 
     def _spin(self, executor: Any) -> None:
         """``executor.spin()``, except that a callback that raises does not stop the node."""
-        while executor.context.ok() and not executor._is_shutdown:  # as rclpy's spin() loops
+        # As rclpy's spin() loops, and our own stop flag besides (see SPIN_BOUND).
+        while not self._stopping and executor.context.ok() and not executor._is_shutdown:
             try:
-                executor.spin_once()
+                executor.spin_once(timeout_sec=SPIN_BOUND)
             except Exception:  # rclpy re-raises a callback's error here: log it, go on
                 _log.exception("a ROS 2 callback of node %s failed", self.name)
 
