@@ -17,7 +17,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine
 
     from ._executive import Executive
-    from ._handle import ActionHandle, Hooks
+    from ._handle import ActionHandle
+    from ._pause import Hooks
 
 P = ParamSpec("P")
 T = TypeVar("T")

@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
-    from ._handle import ActionHandle, ActionState
+    from ._handle import ActionHandle
+    from ._states import ActionState
 
 
 _UNREAD = object()
@@ -55,7 +56,7 @@ class ActionInfo:
         _set_started_at(info, handle.started_at)
         _set_held(info, handle.held)
         _set_awaiting(info, handle.awaiting)
-        _set_cancel_reason(info, handle._cancel_reason)
+        _set_cancel_reason(info, handle.cancel_reason)
         _set_where(info, _UNREAD)
         return info
 

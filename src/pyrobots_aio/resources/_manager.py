@@ -260,7 +260,6 @@ class ResourceManager(Generic[OwnerT]):
         record = self._owners.get(grant.owner)
         if record is not None:
             record.grants.remove(grant)
-            self._sync(grant.owner, record)
         if self._instruments:
             self._emit(EventKind.RESOURCE_RELEASED, grant)
         if lent:
@@ -307,6 +306,20 @@ class ResourceManager(Generic[OwnerT]):
     def held(self) -> dict[Resource, OwnerT]:
         """Every plain resource held now, and its (innermost) holder."""
         return {s.resource: s.holds[-1].owner for s in self._leaves.values() if s.holds}
+
+    def held_by(self, owner: OwnerT) -> tuple[str, ...]:
+        """The names of the resources ``owner`` holds, each once, in the order taken.
+
+        A resource lent to a ``preempt="suspend"`` request still counts as held
+        by its lender, until the lender ends.
+        """
+        record = self._owners.get(owner)
+        return () if record is None else _names(record.grants)
+
+    def awaited_by(self, owner: OwnerT) -> tuple[str, ...]:
+        """The names of the resources ``owner`` waits for, each once, in the order asked."""
+        record = self._owners.get(owner)
+        return () if record is None or not record.waiting else _names(record.waiting)
 
     def __repr__(self) -> str:
         parts = [self._describe(s) for s in self._leaves.values() if s.holds or s.queue]
@@ -371,7 +384,6 @@ class ResourceManager(Generic[OwnerT]):
             leaf.queue.add(grant)
             leaf.compounds += compound
         self._count_below(owner, 1)
-        self._sync(owner, record)
         if self._instruments:
             self._emit(EventKind.RESOURCE_WAITING, grant)
         future = grant._future = asyncio.get_running_loop().create_future()
@@ -398,7 +410,6 @@ class ResourceManager(Generic[OwnerT]):
         record = self._owners.get(grant.owner)
         if record is not None:
             record.waiting.remove(grant)
-            self._sync(grant.owner, record)
         if self._instruments:
             self._emit(EventKind.RESOURCE_RELEASED, grant, withdrawn=True)
         self._flush(grant.leaves)
@@ -427,7 +438,6 @@ class ResourceManager(Generic[OwnerT]):
             if grant._future is not None and not grant._future.done():
                 grant._future.set_result(None)
         record.grants.append(grant)
-        self._sync(owner, record)
         if self._instruments:
             self._emit(EventKind.RESOURCE_ACQUIRED, grant)
         self._flush(grant.leaves)
@@ -465,8 +475,6 @@ class ResourceManager(Generic[OwnerT]):
         for grant in list(record.grants):
             _log.warning("%s is done but still held %s; released", who(owner), list(grant.names))
             self.release(grant)
-        owner.held = ()
-        owner.awaiting = ()
 
     # -- arbitration ------------------------------------------------------
 
@@ -611,14 +619,14 @@ class ResourceManager(Generic[OwnerT]):
                     self._emit(EventKind.RESOURCE_RELEASED, hold, leaves=[name], lent_to=owner.id)
             if lender not in suspended:
                 suspended.add(lender)
-                lender._suspend(reason, owner)
+                lender.suspend(reason, owner)
         self._grant(grant)
         return True
 
     def _unhold(self, leaf: Leaf[OwnerT], grant: Grant[OwnerT]) -> None:
         lender = self._loans.unhold(leaf, grant)
         if lender is not None:
-            lender._unsuspend()
+            lender.unsuspend()
 
     def _give_back(self, leaves: tuple[Leaf[OwnerT], ...]) -> None:
         """Give back the loans on ``leaves`` whose borrowers let go; resume their lenders."""
@@ -631,7 +639,7 @@ class ResourceManager(Generic[OwnerT]):
                     for hold in loan.holds:
                         self._emit(EventKind.RESOURCE_ACQUIRED, hold, **back)
                 if lender is not None:
-                    lender._unsuspend()
+                    lender.unsuspend()
 
     def _skip(self, grant: Grant[OwnerT], why: _rules.Obstacle[OwnerT] | None = None) -> NoReturn:
         resource, holder, ahead = why if why is not None else _rules.obstacle(grant, self._below)
@@ -647,11 +655,6 @@ class ResourceManager(Generic[OwnerT]):
         raise ActionSkipped(resource, holder, queued=queued, queued_priority=priority)
 
     # -- bookkeeping ------------------------------------------------------
-
-    @staticmethod
-    def _sync(owner: OwnerT, record: _Record[OwnerT]) -> None:
-        owner.held = _names(record.grants)
-        owner.awaiting = _names(record.waiting)
 
     def _emit(self, kind: EventKind, grant: Grant[OwnerT], **data: object) -> None:
         owner = grant.owner
