@@ -46,6 +46,10 @@ class Action(Generic[R, P, T]):
     Created by `action`; calling it starts the action and returns its handle.
     """
 
+    # Slots for what every call reads: the wrapper's attributes (update_wrapper) would
+    # otherwise turn the instance dict into one Python 3.11 cannot specialize lookups in.
+    __slots__ = ("__dict__", "__weakref__", "fn", "hooks", "name")
+
     def __init__(
         self,
         fn: Callable[Concatenate[R, P], Coroutine[Any, Any, T]],

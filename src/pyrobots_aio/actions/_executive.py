@@ -2,8 +2,8 @@
 
 One `Executive` per robot. It spawns actions (each handle starts its own
 task), keeps the running ones in a dict by id (for introspection and
-``max_actions``) and, at the top, in the robot's root scope, and tells the
-instruments what happens. Everything else about an action (cancelling,
+``max_actions``; those without a parent are the robot's root scope), and
+tells the instruments what happens. Everything else about an action (cancelling,
 pausing, winding up) is its handle's.
 
 Cancellation is bounded by the grace ladder (`pyrobots_aio._core._grace`):
@@ -41,6 +41,11 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
+# Bound once: Python 3.11 calls a method of an imported name through a generic attribute
+# lookup (no specialized method call), and every action start makes these two calls.
+_current_action = current_action.get
+_start_action = ActionHandle._start
+
 
 class Executive:
     """Runs the actions of one robot (its root scope, registry and cancellation watchdog)."""
@@ -73,7 +78,7 @@ class Executive:
         self.clock: Callable[[], float] = time.monotonic
         """The loop's clock (`clock_of`): the actions' timestamps."""
         self._running: dict[int, ActionHandle[Any]] = {}
-        self._roots: dict[ActionHandle[Any], None] = {}
+        """Every action not yet done, by id, in start order."""
         self._next_id = 1
         self._ladder: Ladder[ActionHandle[Any]] | None = None
         self._closing = False
@@ -116,7 +121,7 @@ class Executive:
         of the calling task is held until every action is done, then re-raised.
         """
         self._closing = True
-        roots = list(self._roots)
+        roots = self.roots()
         by = current_action.get()
         for handle in roots:
             if handle._forgotten():
@@ -145,8 +150,7 @@ class Executive:
         fn: Callable[..., Coroutine[Any, Any, T]],
         coro: Coroutine[Any, Any, T],
         hooks: Hooks | None = None,
-        *,
-        uncapped: bool = False,
+        uncapped: bool = False,  # positional: Python 3.11 specializes no call to keyword-only
     ) -> ActionHandle[T]:
         """Start ``coro`` (made by the action function ``fn``) as an action now; return its handle.
 
@@ -155,7 +159,7 @@ class Executive:
         (the emergency stop: it must never be refused for being one too many).
         """
         loop = self._loop
-        parent = current_action.get()
+        parent = _current_action()
         if parent is not None and (parent._executive is not self or parent.done()):
             parent = None
         if (
@@ -173,10 +177,8 @@ class Executive:
             raise self._refusal(name, loop, uncapped=uncapped)
         ident = self._next_id
         self._next_id = ident + 1
-        handle = ActionHandle(self, loop, ident, name, parent, fn=fn, hooks=hooks, coro=coro)
+        handle = _start_action(self, loop, ident, name, parent, fn, hooks, coro)
         self._running[ident] = handle
-        if parent is None:
-            self._roots[handle] = None
         if self.instruments.items:
             self._emit(EventKind.ACTION_SPAWNED, handle, parent=parent.id if parent else None)
         return handle
@@ -209,10 +211,8 @@ class Executive:
             self._emit(EventKind.ACTION_STARTED, handle)
 
     def finished(self, handle: ActionHandle[Any]) -> None:
-        """Called when an action is done: drop it from the registry and the root scope."""
+        """Called when an action is done: drop it from the registry."""
         self._running.pop(handle.id, None)
-        if handle.parent is None:
-            self._roots.pop(handle, None)
         if self.instruments.items:
             error = handle._error
             self._emit(
@@ -285,7 +285,7 @@ class Executive:
     def _outermost_except(self, spared: set[ActionHandle[Any]]) -> list[ActionHandle[Any]]:
         """The highest actions not spared: roots, or children of spared ancestors."""
         found: list[ActionHandle[Any]] = []
-        stack = list(self._roots)
+        stack = self.roots()
         while stack:
             node = stack.pop()
             if node in spared:
@@ -296,7 +296,7 @@ class Executive:
 
     def pause_all(self, reason: str | None) -> None:
         """Pause every action of the root scope (their subtrees freeze with them)."""
-        for handle in list(self._roots):
+        for handle in self.roots():
             handle.pause(reason)
 
     def resume_all(self) -> None:
@@ -383,7 +383,7 @@ class Executive:
 
     def roots(self) -> list[ActionHandle[Any]]:
         """The running actions of the root scope (started outside any action)."""
-        return list(self._roots)
+        return [handle for handle in self._running.values() if handle.parent is None]
 
     def _emit(self, kind: EventKind, handle: ActionHandle[Any], **data: object) -> None:
         self.instruments.emit(ExecEvent(kind, self.loop.time(), handle.id, handle.name, data))

@@ -45,9 +45,18 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
+_new = object.__new__
+# A waiter is an asyncio.Future (the C one): its methods, called unbound, are specialized
+# calls on Python 3.11 (a bound method call on an instance with a dict slot is not).
+_done, _set_result = asyncio.Future.done, asyncio.Future.set_result
+# Enum members as module globals: on Python 3.11 each ``Outcome.X`` is a slow class lookup
+# (70 ns, through the enum's metaclass), and the hot paths read several.
 PENDING, RUNNING = ActionState.PENDING, ActionState.RUNNING
 FINISHING, DONE = ActionState.FINISHING, ActionState.DONE
 """The phases a handle goes through, in order (its other states are read from `RUNNING`)."""
+CANCELLING, PAUSED, WAITING = ActionState.CANCELLING, ActionState.PAUSED, ActionState.WAITING
+NOT_DONE, SUCCEEDED, FAILED = Outcome.NOT_DONE, Outcome.SUCCEEDED, Outcome.FAILED
+CANCELLED, SKIPPED = Outcome.CANCELLED, Outcome.SKIPPED
 
 current_action: ContextVar[ActionHandle[Any] | None] = ContextVar(
     "pyrobots_aio.current_action", default=None
@@ -141,23 +150,52 @@ class ActionHandle(Generic[T]):
         "id",
         "name",
         "parent",
-        "spawned_at",
         "started_at",
     )
 
-    def __init__(
-        self,
+    id: int
+    name: str
+    parent: ActionHandle[Any] | None
+    started_at: float | None
+    finished_at: float | None
+    _executive: Host
+    _loop: asyncio.AbstractEventLoop
+    _fn: Callable[..., object]
+    _hooks: Hooks | None
+    _phase: ActionState
+    _outcome: Outcome
+    _value: T | None
+    _error: BaseException | None
+    _coro: Coroutine[Any, Any, T] | None
+    _task: asyncio.Task[None] | None
+    _children: dict[ActionHandle[Any], None] | None
+    _cancel: tuple[str | None, ActionHandle[Any] | None] | None
+    """Why and by whom cancellation was requested, once it was."""
+    _freeze: Freeze | None
+    _waiters: list[asyncio.Future[None]] | None
+    _callbacks: list[Callable[[ActionHandle[T]], object]] | None
+    _internal: list[Callable[[ActionHandle[T]], object]] | None
+    _finalizers: list[Callable[[], None]] | None
+    _unretrieved: weakref.finalize[Any, Any] | None
+
+    @classmethod
+    def _start(  # noqa: PLR0917 (every action pays for each call: positional is the cheapest)
+        cls,
         executive: Host,
         loop: asyncio.AbstractEventLoop,
         ident: int,
         name: str,
         parent: ActionHandle[Any] | None,
-        *,
         fn: Callable[..., object],
         hooks: Hooks | None,
         coro: Coroutine[Any, Any, T],
-    ) -> None:
-        """Start ``coro`` (made by the action function ``fn``) as the task of a new action."""
+    ) -> ActionHandle[T]:
+        """Start ``coro`` (made by the action function ``fn``) as the task of a new action.
+
+        Not ``__init__``: calling a class costs an action a tenth more than this
+        (Python 3.11 calls ``__init__`` through the generic path, with an argument tuple).
+        """
+        self: ActionHandle[T] = _new(cls)
         self._executive = executive
         self._loop = loop
         self.id = ident
@@ -165,30 +203,27 @@ class ActionHandle(Generic[T]):
         self.parent = parent
         self._fn = fn
         self._hooks = hooks
-        self.spawned_at = now = executive.clock()
-        self.started_at: float | None = None
-        self.finished_at: float | None = None
+        self.started_at = None
+        self.finished_at = None
         self._phase = PENDING
-        self._outcome = Outcome.NOT_DONE
-        self._value: T | None = None
-        self._error: BaseException | None = None
-        self._coro: Coroutine[Any, Any, T] | None = None
-        self._children: dict[ActionHandle[Any], None] | None = None
-        self._cancel: tuple[str | None, ActionHandle[Any] | None] | None = None
-        """Why and by whom cancellation was requested, once it was."""
-        self._freeze: Freeze | None = None
-        self._waiters: list[asyncio.Future[None]] | None = None
-        self._callbacks: list[Callable[[ActionHandle[T]], object]] | None = None
-        self._internal: list[Callable[[ActionHandle[T]], object]] | None = None
-        self._finalizers: list[Callable[[], None]] | None = None
-        self._unretrieved: weakref.finalize[Any, Any] | None = None
+        self._outcome = NOT_DONE
+        self._value = None
+        self._error = None
+        self._coro = None
+        self._children = None
+        self._cancel = None
+        self._freeze = None
+        self._waiters = None
+        self._callbacks = None
+        self._internal = None
+        self._finalizers = None
+        self._unretrieved = None
         if parent is not None:
-            parent._adopt(self, now)
-        self._task: asyncio.Task[None] | None = loop.create_task(
-            self._run(coro), name=f"{name}#{ident}"
-        )
+            parent._adopt(self)
+        self._task = loop.create_task(self._run(coro), name=f"{name}#{ident}")
+        return self
 
-    def _adopt(self, child: ActionHandle[Any], now: float) -> None:
+    def _adopt(self, child: ActionHandle[Any]) -> None:
         """Take ``child`` as a child; a child of a frozen action starts frozen."""
         if self._children is None:
             self._children = {child: None}
@@ -196,7 +231,7 @@ class ActionHandle(Generic[T]):
             self._children[child] = None
         freeze = self._freeze
         if freeze is not None and freeze.since is not None:
-            child._frozen_from(now)
+            child._frozen_from(self._loop.time())
 
     # -- awaiting ---------------------------------------------------------
 
@@ -218,7 +253,7 @@ class ActionHandle(Generic[T]):
                 self._cancel_subtree("the task awaiting it was cancelled", current_action.get())
                 raise
             finally:
-                if not fut.done() and self._waiters is not None:
+                if not _done(fut) and self._waiters is not None:
                     self._waiters.remove(fut)
         if self._unretrieved is not None:
             self._retrieved()
@@ -258,7 +293,7 @@ class ActionHandle(Generic[T]):
     def _waiter(self, verb: str) -> asyncio.Future[None]:
         """A future the action's end completes; the caller must be on the robot's loop."""
         self._check_here(verb)
-        fut = self._loop.create_future()
+        fut: asyncio.Future[None] = asyncio.Future(loop=self._loop)
         if self._waiters is None:
             self._waiters = [fut]
         else:
@@ -284,7 +319,7 @@ class ActionHandle(Generic[T]):
 
     @property
     def outcome(self) -> Outcome:
-        """The outcome so far (`Outcome.NOT_DONE` until the action is done)."""
+        """The outcome so far (`NOT_DONE` until the action is done)."""
         return self._outcome
 
     @property
@@ -294,11 +329,11 @@ class ActionHandle(Generic[T]):
         if phase is not RUNNING:
             return phase
         if self._cancel is not None:
-            return ActionState.CANCELLING
+            return CANCELLING
         if self._freeze is not None and self._freeze.since is not None:
-            return ActionState.PAUSED
+            return PAUSED
         if self._executive.resources.awaited_by(self):
-            return ActionState.WAITING
+            return WAITING
         return RUNNING
 
     @property
@@ -331,8 +366,8 @@ class ActionHandle(Generic[T]):
         return self._phase is DONE
 
     def cancelled(self) -> bool:
-        """Return True if the action finished with outcome `Outcome.CANCELLED`."""
-        return self._outcome is Outcome.CANCELLED
+        """Return True if the action finished with outcome `CANCELLED`."""
+        return self._outcome is CANCELLED
 
     def result(self) -> T:
         """Return the result of a finished action, or raise what awaiting it would raise.
@@ -434,8 +469,8 @@ class ActionHandle(Generic[T]):
         runs on; its resources are released when its task has really ended.
         """
         task, body = self._task, self._coro
-        self._settle(Outcome.CANCELLED, error=self._interrupted())
-        self._complete(release=False)
+        self._settle(CANCELLED, error=self._interrupted())
+        self._complete(False)
         if task is None or task.done() or body is None:
             return
         try:
@@ -691,18 +726,27 @@ class ActionHandle(Generic[T]):
             never_ran = self._cancel is not None  # a local: the attribute changes while it runs
             if never_ran:  # cancelled before it ever ran: the body never starts
                 coro.close()
-                self._settle(Outcome.CANCELLED, error=self._interrupted())
+                self._settle(CANCELLED, error=self._interrupted())
             else:
                 self._coro = coro
                 self._phase = RUNNING
                 executive = self._executive
-                self.started_at = executive.clock()
+                clock = executive.clock
+                self.started_at = clock()
                 if executive.instruments.items:
                     executive.started(self)
                 try:
-                    value = await Stepped(self, coro)
+                    if self._freeze is None:  # its first step runs here: most bodies end in it
+                        try:
+                            step = coro.send(None)
+                        except StopIteration as end:
+                            value = end.value
+                        else:  # it awaits: the rest goes through the trampoline
+                            value = await Stepped(self, coro, step)
+                    else:  # frozen from its start (a child of a frozen action)
+                        value = await Stepped(self, coro)
                 except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
-                    self._settle(Outcome.FAILED, error=exc)
+                    self._settle(FAILED, error=exc)
                     self._complete()
                     raise
                 except BaseException as exc:
@@ -713,15 +757,16 @@ class ActionHandle(Generic[T]):
                     if self._phase is DONE:
                         return
                     if self._cancel is not None:  # cancellation swallowed: still CANCELLED
-                        self._settle(Outcome.CANCELLED, value, self._interrupted())
+                        self._settle(CANCELLED, value, self._interrupted())
                     else:
-                        self._outcome, self._value = Outcome.SUCCEEDED, value
+                        self._outcome = SUCCEEDED
+                        self._value = value
             self._phase = FINISHING
             if self._children:
                 await self._reap()
-            if self._cancel is not None and self._outcome is Outcome.SUCCEEDED:
+            if self._cancel is not None and self._outcome is SUCCEEDED:
                 # cancelled while its children wound up: CANCELLED (a failure is never masked)
-                self._settle(Outcome.CANCELLED, error=self._interrupted())
+                self._settle(CANCELLED, error=self._interrupted())
             self._complete()
         finally:  # an abandoned action releases its resources only once its task ends
             if self._finalizers is not None:
@@ -766,7 +811,7 @@ class ActionHandle(Generic[T]):
         self._value = value
         self._error = error
 
-    def _complete(self, *, release: bool = True) -> None:
+    def _complete(self, release: bool = True) -> None:  # positional: a specialized call
         """Mark the action done and wake whoever waits for it (idempotent).
 
         With ``release`` False (an abandoned action) the finalizers wait for its
@@ -782,24 +827,27 @@ class ActionHandle(Generic[T]):
             self._freeze.end(self._loop.time())
         self._phase = DONE
         self._coro = None
-        self.finished_at = self._executive.clock()
+        executive = self._executive
+        clock = executive.clock
+        self.finished_at = clock()
         if self._callbacks is not None:  # scheduled first: they run before awaiters resume
             callbacks, self._callbacks = self._callbacks, None
             for callback in callbacks:
                 _schedule(callback, self)
         waiting = False
-        if self._waiters is not None:
-            for fut in self._waiters:
-                if not fut.done():
-                    fut.set_result(None)
-                    waiting = True
+        waiters = self._waiters
+        if waiters is not None:
             self._waiters = None
+            for fut in waiters:
+                if not _done(fut):
+                    _set_result(fut, None)
+                    waiting = True
         self._task = None  # the task's context refers back to this handle
-        if self._outcome is Outcome.FAILED and not waiting:
+        if self._outcome is FAILED and not waiting:
             self._report_unless_retrieved()
         if self.parent is not None:
             self.parent._forget(self)
-        self._executive.finished(self)
+        executive.finished(self)
         if self._internal is not None:
             internal, self._internal = self._internal, None
             for callback in internal:
@@ -865,19 +913,19 @@ def all_done(
 
 def _settle_error(handle: ActionHandle[Any], exc: BaseException) -> None:
     if isinstance(exc, asyncio.CancelledError):
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+        handle._settle(CANCELLED, error=handle._interrupted())
     elif isinstance(exc, ActionSkipped) and exc.handle is None:
         # Its own lock request was refused. A skip that already names an action is a
         # child's, re-raised by awaiting it: for this action, an ordinary failure.
         exc.handle = handle
-        handle._settle(Outcome.SKIPPED, error=exc)
+        handle._settle(SKIPPED, error=exc)
     elif handle._cancel is not None:
         handle._executive.log.warning(
             "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
         )
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
+        handle._settle(CANCELLED, error=handle._interrupted(exc))
     else:
-        handle._settle(Outcome.FAILED, error=exc.with_traceback(_from_the_body(exc)))
+        handle._settle(FAILED, error=exc.with_traceback(_from_the_body(exc)))
 
 
 def _from_the_body(error: BaseException) -> TracebackType | None:

@@ -129,11 +129,18 @@ Hooks = tuple["Callable[[Any], object] | None", "Callable[[Any], object] | None"
 """An action's pause and resume hooks, each called with the robot (or None)."""
 
 
+_NOTHING = object()
+_YIELDED = object()
+"""`Stepped._thawing` when the body's first yield is still to be passed to the task."""
+
+
 class Stepped(Generic[T]):
     """The body ``coro``, awaited through this: each resumption held while ``handle`` is frozen.
 
     An iterator that the action's task awaits in the body's place: it forwards
-    each ``send``/``throw`` to the body, unless the action is frozen. Then it
+    each ``send``/``throw`` to the body, unless the action is frozen. Given
+    ``yielded``, the body has run its first step already (the action's task
+    runs it unwrapped, as most bodies end there) and that is what it awaits. Then it
     keeps the value meant for the body and hands the task the action's thaw
     future; when that completes, the kept value goes on to the body. An
     exception thrown in (cancellation) goes on to the body at once, frozen or
@@ -143,11 +150,17 @@ class Stepped(Generic[T]):
 
     __slots__ = ("_coro", "_handle", "_held", "_thawing")
 
-    def __init__(self, handle: Frozen, coro: Coroutine[Any, Any, T]) -> None:
+    def __init__(
+        self, handle: Frozen, coro: Coroutine[Any, Any, T], yielded: Any = _NOTHING
+    ) -> None:
         self._handle = handle
         self._coro = coro
-        self._held: Any = None  # the value the body gets when it thaws
-        self._thawing = False  # the task waits for the thaw future
+        if yielded is _NOTHING:
+            self._held: Any = None  # the value the body gets when it thaws
+            self._thawing: object = False  # the task waits for the thaw future
+        else:  # the body was stepped once already: what it yielded goes to the task first
+            self._held = yielded
+            self._thawing = _YIELDED
 
     def __await__(self) -> Generator[Any, Any, T]:
         return self  # an iterator with send and throw, as a generator
@@ -162,8 +175,11 @@ class Stepped(Generic[T]):
 
     def send(self, value: Any) -> Any:
         """Resume the body with ``value``, or hand the task the thaw future while it is frozen."""
-        if self._thawing:  # the thaw future is done: the kept value, once the action thaws
-            value = self._held
+        if self._thawing:
+            if self._thawing is _YIELDED:  # not a resumption: the body's first yield, passed on
+                yielded, self._held, self._thawing = self._held, None, False
+                return yielded
+            value = self._held  # the thaw future is done: the kept value, once it thaws
         handle = self._handle
         freeze = handle._freeze
         if freeze is not None and freeze.since is not None:
