@@ -18,6 +18,8 @@ import enum
 from collections import deque
 from typing import TYPE_CHECKING, Generic, TypeVar
 
+from ._loops import clock_of
+
 if TYPE_CHECKING:
     import asyncio
     from collections.abc import Callable
@@ -32,6 +34,9 @@ class Stage(enum.Enum):
     """One grace after the cancellation: cancel it again, with a warning."""
     ABANDON = "abandon"
     """A grace after escalating: give it up, with an error."""
+
+
+_ESCALATE, _ABANDON = Stage.ESCALATE, Stage.ABANDON  # globals: a class lookup is slow on 3.11
 
 
 class Ladder(Generic[T]):
@@ -59,7 +64,7 @@ class Ladder(Generic[T]):
         [('cleanup', 'escalate', 2.0), ('cleanup', 'abandon', 4.0)]
     """
 
-    __slots__ = ("_loop", "_queue", "_step", "_timer", "grace")
+    __slots__ = ("_clock", "_loop", "_queue", "_step", "_timer", "grace")
 
     def __init__(
         self,
@@ -68,6 +73,7 @@ class Ladder(Generic[T]):
         step: Callable[[T, Stage], bool],
     ) -> None:
         self._loop = loop
+        self._clock = clock_of(loop)
         self.grace = grace
         self._step = step
         self._queue: deque[tuple[float, Stage, T]] = deque()
@@ -75,7 +81,9 @@ class Ladder(Generic[T]):
 
     def watch(self, item: T) -> None:
         """Start the ladder for ``item``: its first step is one grace from now."""
-        self._later(item, Stage.ESCALATE)
+        self._queue.append((self._clock() + self.grace, _ESCALATE, item))
+        if self._timer is None:
+            self._arm()
 
     def close(self) -> None:
         """Stop watching everything (nothing is called any more)."""
@@ -84,11 +92,6 @@ class Ladder(Generic[T]):
             self._timer = None
         self._queue.clear()
 
-    def _later(self, item: T, stage: Stage) -> None:
-        self._queue.append((self._loop.time() + self.grace, stage, item))
-        if self._timer is None:
-            self._arm()
-
     def _arm(self) -> None:
         """Set the timer at the earliest deadline, if anything is watched."""
         if self._queue:
@@ -96,11 +99,11 @@ class Ladder(Generic[T]):
 
     def _due(self) -> None:
         self._timer = None
-        now = self._loop.time()
+        now = self._clock()
         queue = self._queue
         while queue and queue[0][0] <= now:
             _, stage, item = queue.popleft()
-            if self._step(item, stage) and stage is Stage.ESCALATE:
-                queue.append((self._loop.time() + self.grace, Stage.ABANDON, item))
+            if self._step(item, stage) and stage is _ESCALATE:
+                queue.append((self._clock() + self.grace, _ABANDON, item))
         if self._timer is None:  # unless a step watched something (and armed it)
             self._arm()

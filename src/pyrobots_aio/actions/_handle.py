@@ -325,6 +325,10 @@ class ActionHandle(Generic[T]):
     @property
     def state(self) -> ActionState:
         """Where the action is now (pending, waiting, running, cancelling, finishing, done)."""
+        return self._state(bool(self._executive.resources.awaited_by(self)))
+
+    def _state(self, waiting: bool) -> ActionState:
+        """`state`, given whether the action waits for a resource (its manager's answer)."""
         phase = self._phase
         if phase is not RUNNING:
             return phase
@@ -332,9 +336,7 @@ class ActionHandle(Generic[T]):
             return CANCELLING
         if self._freeze is not None and self._freeze.since is not None:
             return PAUSED
-        if self._executive.resources.awaited_by(self):
-            return WAITING
-        return RUNNING
+        return WAITING if waiting else RUNNING
 
     @property
     def held(self) -> tuple[str, ...]:
@@ -456,8 +458,8 @@ class ActionHandle(Generic[T]):
         A pending action is not touched: `_run` sees the request and never starts
         the body; a finishing one only waits for its (cancelled) children.
         """
-        if self._phase is RUNNING and self._task is not None:
-            self._task.cancel(self.cancel_reason)
+        if self._phase is RUNNING and self._task is not None and self._cancel is not None:
+            self._task.cancel(self._cancel[0])
 
     def _abandon(self, after: float) -> None:
         """Declare the action done (CANCELLED), then end its body and its task.
@@ -906,8 +908,9 @@ def all_done(
     """A future done once every handle is (awaiting it never cancels them)."""
     pending = [h for h in handles if not h.done()]
     countdown = Countdown(loop, len(pending))
+    tick = countdown.tick
     for handle in pending:
-        handle._on_done(countdown.tick)
+        handle._on_done(tick)
     return countdown.future
 
 

@@ -64,6 +64,9 @@ class _Record(Generic[OwnerT]):
         self.waiting: list[Grant[OwnerT]] = []
 
 
+_NOTHING: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())
+
+
 def _names(grants: list[Grant[OwnerT]]) -> tuple[str, ...]:
     """The names of the resources of ``grants``, each once, in order."""
     if len(grants) == 1:
@@ -320,6 +323,13 @@ class ResourceManager(Generic[OwnerT]):
         """The names of the resources ``owner`` waits for, each once, in the order asked."""
         record = self._owners.get(owner)
         return () if record is None or not record.waiting else _names(record.waiting)
+
+    def holdings(self, owner: OwnerT) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """`held_by` and `awaited_by` of ``owner`` at once (``robot.running()`` asks for both)."""
+        record = self._owners.get(owner)
+        if record is None:
+            return _NOTHING
+        return _names(record.grants), _names(record.waiting) if record.waiting else ()
 
     def __repr__(self) -> str:
         parts = [self._describe(s) for s in self._leaves.values() if s.holds or s.queue]
