@@ -36,9 +36,6 @@ class Stage(enum.Enum):
     """A grace after escalating: give it up, with an error."""
 
 
-_ESCALATE, _ABANDON = Stage.ESCALATE, Stage.ABANDON  # globals: a class lookup is slow on 3.11
-
-
 class Ladder(Generic[T]):
     """Calls ``step(item, stage)`` a grace after `watch`, then a grace after escalating.
 
@@ -81,7 +78,7 @@ class Ladder(Generic[T]):
 
     def watch(self, item: T) -> None:
         """Start the ladder for ``item``: its first step is one grace from now."""
-        self._queue.append((self._clock() + self.grace, _ESCALATE, item))
+        self._queue.append((self._clock() + self.grace, Stage.ESCALATE, item))
         if self._timer is None:
             self._arm()
 
@@ -103,7 +100,7 @@ class Ladder(Generic[T]):
         queue = self._queue
         while queue and queue[0][0] <= now:
             _, stage, item = queue.popleft()
-            if self._step(item, stage) and stage is _ESCALATE:
-                queue.append((self._clock() + self.grace, _ABANDON, item))
+            if self._step(item, stage) and stage is Stage.ESCALATE:
+                queue.append((self._clock() + self.grace, Stage.ABANDON, item))
         if self._timer is None:  # unless a step watched something (and armed it)
             self._arm()

@@ -209,7 +209,7 @@ class ActionHandle(Generic[T]):
         self._outcome = NOT_DONE
         self._value = None
         self._error = None
-        self._coro = None
+        self._coro = coro  # (`location` reads it only once the body runs)
         self._children = None
         self._cancel = None
         self._freeze = None
@@ -250,11 +250,12 @@ class ActionHandle(Generic[T]):
             try:
                 yield from fut
             except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
+                self._forget_waiter(fut)
                 self._cancel_subtree("the task awaiting it was cancelled", current_action.get())
                 raise
-            finally:
-                if not _done(fut) and self._waiters is not None:
-                    self._waiters.remove(fut)
+            except BaseException:  # closed, or something else thrown in: it waits no more
+                self._forget_waiter(fut)
+                raise
         if self._unretrieved is not None:
             self._retrieved()
         if self._error is not None:
@@ -312,7 +313,7 @@ class ActionHandle(Generic[T]):
             raise wrong_loop(what, self._loop, self._executive.thread)
 
     def _forget_waiter(self, fut: asyncio.Future[None]) -> None:
-        if not fut.done() and self._waiters is not None:
+        if not _done(fut) and self._waiters is not None:
             self._waiters.remove(fut)
 
     # -- inspecting -------------------------------------------------------
@@ -470,7 +471,7 @@ class ActionHandle(Generic[T]):
         ``asyncio.run``) waits for it forever. A body that catches even that
         runs on; its resources are released when its task has really ended.
         """
-        task, body = self._task, self._coro
+        task, body = self._task, self._coro if self._phase is RUNNING else None
         self._settle(CANCELLED, error=self._interrupted())
         self._complete(False)
         if task is None or task.done() or body is None:
@@ -730,7 +731,6 @@ class ActionHandle(Generic[T]):
                 coro.close()
                 self._settle(CANCELLED, error=self._interrupted())
             else:
-                self._coro = coro
                 self._phase = RUNNING
                 executive = self._executive
                 clock = executive.clock
@@ -821,7 +821,7 @@ class ActionHandle(Generic[T]):
         """
         if self._phase is DONE:
             return
-        if release and self._finalizers is not None:
+        if self._finalizers is not None and release:
             self._run_finalizers()
         if self._freeze is not None:  # a done action is frozen no more
             self._freeze.unpause()
