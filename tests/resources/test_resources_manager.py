@@ -88,6 +88,7 @@ async def test_free_resource_is_granted_without_waiting() -> None:
     grant = await manager.acquire(a, XY)
     assert grant.held
     assert manager.held_by(a) == ("xy",)
+    assert manager.holdings(a) == (("xy",), ())  # held and awaited, in one question
     assert manager.owner(X) is a
     assert manager.owner(XY) is a
     assert manager.owner(W) is None
@@ -110,6 +111,7 @@ async def test_waiters_are_served_by_priority_then_in_order() -> None:
     expected = [owners[1], owners[3], owners[2], owners[0]]
     assert manager.waiters(W) == expected
     assert all(manager.awaited_by(o) == ("w",) for o in owners)
+    assert manager.holdings(owners[0]) == ((), ("w",))
     served = []
     grant.release()
     for _ in expected:
