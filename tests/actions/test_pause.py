@@ -153,6 +153,45 @@ async def test_cancellation_reaches_a_paused_action_at_once_and_its_cleanup_runs
     assert log == ["cleaned up at 7"]
 
 
+@pytest.mark.asyncio
+async def test_a_pause_leaves_the_cleanup_of_a_cancelled_descendant_running() -> None:
+    log: list[str] = []
+    events = EventLog()
+
+    @action(on_pause=lambda robot: log.append("tidy paused"))
+    async def tidy(robot: Robot) -> None:
+        await robot.sleep(1)
+        log.append(f"tidied at {robot.time():g}")
+
+    @action
+    async def arm(robot: Robot) -> None:
+        try:
+            await robot.sleep(3600)
+        except ActionCancelled:
+            await tidy(robot)  # its cleanup: it runs unfrozen
+            raise
+
+    @action
+    async def task(robot: Robot) -> None:
+        arm(robot)
+        await robot.sleep(3600)
+
+    async with Robot(instruments=[events]) as robot:
+        top = task(robot)
+        await robot.sleep(0.5)
+        [child] = top.children
+        child.cancel("bumper")
+        await robot.sleep(0.25)
+        top.pause("operator")
+        [cleanup] = child.children
+        assert (cleanup.paused, cleanup.frozen_time()) == (False, 0.0)
+        await robot.sleep(2)
+        assert log == ["tidied at 1.5"]  # the pause did not stretch the cleanup's sleep
+        top.resume()
+        await robot.cancel_all()
+    assert [e.name for e in events.of_kind(EventKind.ACTION_PAUSED)] == ["task"]
+
+
 @action
 @lock(ARM)
 async def hold_arm(robot: Robot, log: list[str], name: str, seconds: float) -> None:

@@ -25,7 +25,7 @@ XY = CompoundResource(X, Y, name="xy")
 
 
 class Owner:
-    """A stand-in for an ActionHandle: what the manager needs, and a record of cancels."""
+    """A stand-in for an ActionHandle: what the manager needs (`Owner`), and a record of cancels."""
 
     count = 0
 
@@ -34,8 +34,6 @@ class Owner:
         self.id = Owner.count
         self.name = name
         self.parent = parent
-        self.held: tuple[str, ...] = ()
-        self.awaiting: tuple[str, ...] = ()
         self.reasons: list[str | None] = []
         self.cancel_requested = False
         self._done = False
@@ -89,7 +87,8 @@ async def test_free_resource_is_granted_without_waiting() -> None:
     a = Owner("a")
     grant = await manager.acquire(a, XY)
     assert grant.held
-    assert a.held == ("xy",)
+    assert manager.held_by(a) == ("xy",)
+    assert manager.holdings(a) == (("xy",), ())  # held and awaited, in one question
     assert manager.owner(X) is a
     assert manager.owner(XY) is a
     assert manager.owner(W) is None
@@ -97,7 +96,7 @@ async def test_free_resource_is_granted_without_waiting() -> None:
     assert repr(grant) == f"<Grant 'xy' held by a#{a.id} priority=0>"
     grant.release()
     grant.release()  # idempotent
-    assert a.held == ()
+    assert manager.held_by(a) == ()
     assert_idle(manager)
 
 
@@ -111,7 +110,8 @@ async def test_waiters_are_served_by_priority_then_in_order() -> None:
     await settle()
     expected = [owners[1], owners[3], owners[2], owners[0]]
     assert manager.waiters(W) == expected
-    assert all(o.awaiting == ("w",) for o in owners)
+    assert all(manager.awaited_by(o) == ("w",) for o in owners)
+    assert manager.holdings(owners[0]) == ((), ("w",))
     served = []
     grant.release()
     for _ in expected:
@@ -265,7 +265,7 @@ async def test_holder_taking_more_does_not_yield_to_a_request_it_blocks() -> Non
     waiting = start(manager, Owner("both"), W, X)
     await settle()
     x_grant = await manager.acquire(holder, X)
-    assert holder.held == ("w", "x")
+    assert manager.held_by(holder) == ("w", "x")
     x_grant.release()
     w_grant.release()
     (await waiting).release()
@@ -405,7 +405,7 @@ async def test_cancel_while_waiting_leaves_nothing_queued_and_unblocks_those_beh
     compound_task.cancel()
     await settle()
     assert compound_task.cancelled()
-    assert compound.awaiting == ()
+    assert manager.awaited_by(compound) == ()
     assert manager.waiters(XY) == []
     assert manager.owner(Y) is single
     (await single_task).release()
@@ -435,8 +435,8 @@ async def test_owner_done_releases_what_it_still_holds(caplog: pytest.LogCapture
     other = await manager.acquire(Owner("other"), Y)
     await settle()
     forgetful.finish()
-    assert forgetful.held == ()
-    assert forgetful.awaiting == ()
+    assert manager.held_by(forgetful) == ()
+    assert manager.awaited_by(forgetful) == ()
     with pytest.raises(LockUsageError) as info:
         await waiting_task
     assert (

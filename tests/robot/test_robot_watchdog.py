@@ -106,7 +106,7 @@ async def test_a_block_is_reported_once_naming_the_action_its_line_and_stack(
     assert "robot.to_thread(fn, *args)" in warning
     stack = warning.split("The blocking stack (most recent call last):\n")[1]
     lines = stack.splitlines()
-    assert lines[0].endswith(", in drive")  # the action's task, from its first frame
+    assert lines[0].endswith(", in _run")  # the action's task, from its first frame
     body = lines.index(f'  File "{__file__}", line {where[0].rsplit(":", 1)[1]}, in crunch')
     assert (
         lines[body + 1]

@@ -17,7 +17,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine
 
     from ._executive import Executive
-    from ._handle import ActionHandle, Hooks
+    from ._handle import ActionHandle
+    from ._pause import Hooks
 
 P = ParamSpec("P")
 T = TypeVar("T")
@@ -44,6 +45,10 @@ class Action(Generic[R, P, T]):
 
     Created by `action`; calling it starts the action and returns its handle.
     """
+
+    # Slots for what every call reads: the wrapper's attributes (update_wrapper) would
+    # otherwise turn the instance dict into one Python 3.11 cannot specialize lookups in.
+    __slots__ = ("__dict__", "__weakref__", "fn", "hooks", "name")
 
     def __init__(
         self,

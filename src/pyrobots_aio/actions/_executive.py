@@ -1,13 +1,18 @@
-"""The executive: starts actions as tasks, keeps their tree, cancels within a grace period.
+"""The executive: starts actions, keeps their registry, bounds their cleanup in time.
 
-One `Executive` per robot. Running actions are kept in a dict by id (for
-introspection and ``max_actions``) and, at the top, in the robot's root scope.
-Cancellation is bounded by a watchdog: `cancel_grace` after a cancellation an
-action whose body still runs is cancelled again with a warning; after a second
-grace it is abandoned (reported as an ERROR) so that shutdown always completes.
-An action whose body has ended only waits for its cancelled children, each
-watched on its own: a subtree takes at most two graces a level (a cleanup that
-starts a child adds a level), never forever.
+One `Executive` per robot. It spawns actions (each handle starts its own
+task), keeps the running ones in a dict by id (for introspection and
+``max_actions``; those without a parent are the robot's root scope), and
+tells the instruments what happens. Everything else about an action (cancelling,
+pausing, winding up) is its handle's.
+
+Cancellation is bounded by the grace ladder (`pyrobots_aio._core._grace`):
+`cancel_grace` after a cancellation an action whose body still runs is
+cancelled again with a warning; after a second grace it is abandoned
+(reported as an ERROR) so that shutdown always completes. An action whose
+body has ended only waits for its cancelled children, each watched on its
+own: a subtree takes at most two graces a level (a cleanup that starts a
+child adds a level), never forever.
 """
 
 from __future__ import annotations
@@ -15,7 +20,6 @@ from __future__ import annotations
 import asyncio
 import threading
 import time
-from collections import deque
 from threading import get_ident
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -29,33 +33,28 @@ from .._core._events import (
     CancelEscalated,
     CancelRequested,
 )
+from .._core._grace import Ladder, Stage
 from .._core._instrument import Instruments
 from .._core._logging import LogScope
 from .._core._loops import clock_of, running_here, wrong_loop
 from .._core._numbers import finite
-from .._core._waiting import Countdown, wait_shielded
+from .._core._waiting import wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
-from ._context import current_action
-from ._handle import ActionHandle, ActionState, Outcome, drive
-from ._pause import (
-    freeze,
-    freeze_subtree,
-    frozen,
-    run_hooks,
-    stop_frozen_clock,
-    thaw,
-    thaw_subtree,
-)
-from ._phases import DONE
+from ..resources import ResourceManager
+from ._handle import ActionHandle, all_done, current_action
+from ._states import ActionState, Outcome
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Iterable
 
-    from ._handle import Hooks
+    from ._pause import Hooks
 
 T = TypeVar("T")
 
-_ESCALATE, _ABANDON = 1, 2
+# Bound once: Python 3.11 calls a method of an imported name through a generic attribute
+# lookup (no specialized method call), and every action start makes these two calls.
+_current_action = current_action.get
+_start_action = ActionHandle._start
 
 
 class Executive:
@@ -65,6 +64,7 @@ class Executive:
         self,
         owner: object,
         *,
+        resources: ResourceManager[ActionHandle[Any]] | None = None,
         max_actions: int | None = None,
         cancel_grace: float = 2.0,
         instruments: Instruments | None = None,
@@ -72,6 +72,10 @@ class Executive:
     ) -> None:
         _check_options(max_actions, cancel_grace)
         self.owner = owner
+        self.resources: ResourceManager[ActionHandle[Any]] = (
+            resources if resources is not None else ResourceManager()
+        )
+        """The lock state of the robot: it answers what an action holds and awaits."""
         self.max_actions = max_actions
         self.cancel_grace = float(cancel_grace)
         self.instruments = instruments if instruments is not None else Instruments()
@@ -84,13 +88,10 @@ class Executive:
         self.clock: Callable[[], float] = time.monotonic
         """The loop's clock (`clock_of`): the actions' timestamps."""
         self._running: dict[int, ActionHandle[Any]] = {}
-        self._roots: dict[ActionHandle[Any], None] = {}
+        """Every action not yet done, by id, in start order."""
         self._next_id = 1
-        self._watch: deque[tuple[float, int, ActionHandle[Any]]] = deque()
-        self._watch_timer: asyncio.TimerHandle | None = None
+        self._ladder: Ladder[ActionHandle[Any]] | None = None
         self._closing = False
-        self.paused = 0
-        """How many actions are paused or suspended now (0: nothing is frozen, the fast path)."""
 
     # -- lifecycle --------------------------------------------------------
 
@@ -113,6 +114,7 @@ class Executive:
         self.thread = threading.current_thread().name
         self.thread_ident = get_ident()
         self.clock = clock_of(loop)
+        self._ladder = Ladder(loop, self.cancel_grace, self._overdue)
 
     def check_loop(self, what: str) -> asyncio.AbstractEventLoop:
         """The robot's loop; `EventLoopError` if the caller is on another thread or loop."""
@@ -129,7 +131,7 @@ class Executive:
         of the calling task is held until every action is done, then re-raised.
         """
         self._closing = True
-        roots = list(self._roots)
+        roots = self.roots()
         by = current_action.get()
         for handle in roots:
             if handle._forgotten():
@@ -140,14 +142,13 @@ class Executive:
                     handle.name,
                     handle.id,
                 )
-            self.cancel_tree(handle, reason, by)
+            handle._cancel_subtree(reason, by)
         try:
-            await wait_shielded(self.all_done(roots))
+            await wait_shielded(all_done(roots, self.loop))
         finally:
-            if self._watch_timer is not None:
-                self._watch_timer.cancel()
-                self._watch_timer = None
-            self._watch.clear()
+            if self._ladder is not None:
+                self._ladder.close()
+                self._ladder = None
             self._loop = None
             self._closing = False
 
@@ -159,8 +160,7 @@ class Executive:
         fn: Callable[..., Coroutine[Any, Any, T]],
         coro: Coroutine[Any, Any, T],
         hooks: Hooks | None = None,
-        *,
-        uncapped: bool = False,
+        uncapped: bool = False,  # positional: Python 3.11 specializes no call to keyword-only
     ) -> ActionHandle[T]:
         """Start ``coro`` (made by the action function ``fn``) as an action now; return its handle.
 
@@ -169,8 +169,8 @@ class Executive:
         (the emergency stop: it must never be refused for being one too many).
         """
         loop = self._loop
-        parent = current_action.get()
-        if parent is not None and (parent._executive is not self or parent._phase == DONE):
+        parent = _current_action()
+        if parent is not None and (parent._executive is not self or parent.done()):
             parent = None
         if (
             loop is None
@@ -187,21 +187,10 @@ class Executive:
             raise self._refusal(name, loop, uncapped=uncapped)
         ident = self._next_id
         self._next_id = ident + 1
-        handle: ActionHandle[T] = ActionHandle(
-            self, loop, ident, name, parent, spawned_at=self.clock()
-        )
-        handle._fn = fn
-        handle._hooks = hooks
-        if self.paused and parent is not None and frozen(parent):
-            handle._frozen_since = handle.spawned_at  # a child of a frozen action starts frozen
-        handle._task = loop.create_task(drive(handle, coro), name=f"{name}#{ident}")
+        handle = _start_action(self, loop, ident, name, parent, fn, hooks, coro)
         self._running[ident] = handle
-        if parent is None:
-            self._roots[handle] = None
-        else:
-            parent._children[handle] = None
         if self.instruments.items:
-            parent_id = parent.id if parent else None
+            parent_id = parent.id if parent is not None else None
             self.instruments.emit(ActionSpawned(loop.time(), ident, name, parent_id))
         return handle
 
@@ -225,19 +214,16 @@ class Executive:
         )
         return RobotNotRunningError(msg)
 
+    # -- what the handles tell ---------------------------------------------
+
     def started(self, handle: ActionHandle[Any]) -> None:
-        """Called by the action's task when its body starts."""
+        """Called by the action's task when its body starts (only when instruments listen)."""
         if self.instruments.items:
             self.instruments.emit(ActionStarted(self.loop.time(), handle.id, handle.name))
 
     def finished(self, handle: ActionHandle[Any]) -> None:
-        """Called when an action is done: drop it from the registry and its scope."""
+        """Called when an action is done: drop it from the registry."""
         self._running.pop(handle.id, None)
-        parent = handle.parent
-        if parent is None:
-            self._roots.pop(handle, None)
-        else:
-            parent._children.pop(handle, None)
         if self.instruments.items:
             outcome = handle.outcome
             error = repr(handle._error) if outcome is Outcome.FAILED else None
@@ -245,34 +231,38 @@ class Executive:
             event = ActionFinished(now, handle.id, handle.name, outcome.value, error)
             self.instruments.emit(event)
 
-    # -- cancelling -------------------------------------------------------
-
-    def cancel_tree(
+    def cancelling(
         self, handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
     ) -> None:
-        """Cancel ``handle`` and every descendant it has now, recording who and why.
+        """Called when cancellation of ``handle`` is requested: watch it with the grace ladder."""
+        if self._ladder is not None:
+            self._ladder.watch(handle)
+        if self.instruments.items:
+            by_id, now = by.id if by is not None else None, self.loop.time()
+            self.instruments.emit(CancelRequested(now, handle.id, handle.name, reason, by_id))
 
-        An action already cancelled is passed over with its subtree: what it
-        started since its cancellation is its cleanup, which a second cancel
-        never cuts short (the watchdog bounds it, counted from the first).
-        """
-        stack = [handle]
-        while stack:
-            node = stack.pop()
-            if node._cancel_requested or node.done():
-                continue
-            stack.extend(node._children)
-            node._cancel_requested = True
-            node._cancel_reason = reason
-            node._cancel_by = by
-            if node._frozen_since is not None:  # cancellation thaws it: its cleanup runs
-                stop_frozen_clock(node)
-            node._interrupt()
-            self._watch_later(node, _ESCALATE)
-            if self.instruments.items:
-                by_id = by.id if by is not None else None
-                now = self.loop.time()
-                self.instruments.emit(CancelRequested(now, node.id, node.name, reason, by_id))
+    def froze(
+        self,
+        handle: ActionHandle[Any],
+        nodes: list[ActionHandle[Any]],
+        reason: str | None,
+        by: ActionHandle[Any] | None,
+    ) -> None:
+        """Called when pausing or suspending ``handle`` froze ``nodes``."""
+        if self.instruments.items:
+            by_id, now = by.id if by is not None else None, self.loop.time()
+            for node in nodes:
+                event = ActionPaused(now, node.id, node.name, reason, by_id, handle.id)
+                self.instruments.emit(event)
+
+    def thawed(self, handle: ActionHandle[Any], nodes: list[ActionHandle[Any]]) -> None:
+        """Called when resuming or unsuspending ``handle`` thawed ``nodes``."""
+        if self.instruments.items:
+            now = self.loop.time()
+            for node in nodes:
+                self.instruments.emit(ActionResumed(now, node.id, node.name, handle.id))
+
+    # -- every action at once ---------------------------------------------
 
     async def cancel_all(
         self, reason: str | None = None, keep: Iterable[ActionHandle[Any]] = ()
@@ -287,153 +277,53 @@ class Executive:
         targets = self._outermost_except(spared)
         by = current_action.get()
         for handle in targets:
-            self.cancel_tree(handle, reason, by)
-        await self.all_done(targets)
+            handle._cancel_subtree(reason, by)
+        await all_done(targets, self.loop)
+
+    def all_done(self, handles: Iterable[ActionHandle[Any]]) -> asyncio.Future[None]:
+        """A future done once every handle is (awaiting it never cancels them)."""
+        return all_done(handles, self.loop)
 
     def _outermost_except(self, spared: set[ActionHandle[Any]]) -> list[ActionHandle[Any]]:
         """The highest actions not spared: roots, or children of spared ancestors."""
         found: list[ActionHandle[Any]] = []
-        stack = list(self._roots)
+        stack = self.roots()
         while stack:
             node = stack.pop()
             if node in spared:
-                stack.extend(node._children)
+                stack.extend(node.children)
             else:
                 found.append(node)
         return found
 
-    async def reap_children(self, handle: ActionHandle[Any]) -> None:
-        """Wait for the children still running when ``handle``'s body ended.
-
-        They are cancelled first, unless ``handle`` was itself cancelled: then
-        its children of that time are cancelled already, and those its cleanup
-        started run to their end (the watchdog bounds them).
-        """
-        while handle._children:
-            children = list(handle._children)
-            if not handle._cancel_requested:
-                reason, by = f"its parent {handle.name}#{handle.id} finished", current_action.get()
-                for child in children:
-                    self.cancel_tree(child, reason, by)
-            await self.all_done(children)
-
-    def all_done(self, handles: Iterable[ActionHandle[Any]]) -> asyncio.Future[None]:
-        """A future done once every handle is (awaiting it never cancels them)."""
-        pending = [h for h in handles if not h.done()]
-        countdown = Countdown(self.loop, len(pending))
-        for handle in pending:
-            handle._on_done(countdown.tick)
-        return countdown.future
-
-    # -- pausing ----------------------------------------------------------
-
-    def pause_tree(
-        self, handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
-    ) -> None:
-        """Pause ``handle``: freeze its subtree, run the pause hooks, record who and why."""
-        if not handle._paused:
-            self.paused += 1
-        self._froze(handle, freeze(handle, reason, by), reason, by)
-
-    def resume_tree(self, handle: ActionHandle[Any]) -> None:
-        """Resume ``handle``: thaw what is no longer under a pause, run the resume hooks."""
-        if handle._paused:
-            handle._paused = False
-            self.paused -= 1
-        self._thawed(handle, thaw(handle))
-
-    def suspend_tree(
-        self, handle: ActionHandle[Any], reason: str, by: ActionHandle[Any] | None
-    ) -> None:
-        """Suspend ``handle`` (its resource is lent to ``by``): freeze as a pause, apart from it."""
-        if handle._suspended is None:
-            self.paused += 1
-        handle._suspended = reason
-        self._froze(handle, freeze_subtree(handle), reason, by)
-
-    def unsuspend_tree(self, handle: ActionHandle[Any]) -> None:
-        """End ``handle``'s suspension: thaw what is no longer frozen, run the resume hooks."""
-        if handle._suspended is None:
-            return
-        handle._suspended = None
-        self.paused -= 1
-        self._thawed(handle, thaw_subtree(handle))
-
-    def _froze(
-        self,
-        handle: ActionHandle[Any],
-        newly: list[ActionHandle[Any]],
-        reason: str | None,
-        by: ActionHandle[Any] | None,
-    ) -> None:
-        if self.instruments.items:
-            by_id, now = by.id if by is not None else None, self.loop.time()
-            for node in newly:
-                event = ActionPaused(now, node.id, node.name, reason, by_id, handle.id)
-                self.instruments.emit(event)
-        run_hooks(newly, 0, "pause")
-
-    def _thawed(self, handle: ActionHandle[Any], thawed: list[ActionHandle[Any]]) -> None:
-        if self.instruments.items:
-            now = self.loop.time()
-            for node in thawed:
-                self.instruments.emit(ActionResumed(now, node.id, node.name, handle.id))
-        run_hooks(thawed, 1, "resume")
-
-    def unpause(self, handle: ActionHandle[Any]) -> None:
-        """Count ``handle`` as neither paused nor suspended any more (it is done)."""
-        if handle._paused:
-            handle._paused = False
-            self.paused -= 1
-        if handle._suspended is not None:
-            handle._suspended = None
-            self.paused -= 1
-
     def pause_all(self, reason: str | None) -> None:
         """Pause every action of the root scope (their subtrees freeze with them)."""
-        by = current_action.get()
-        for handle in list(self._roots):
-            if not handle.done():
-                self.pause_tree(handle, reason, by)
+        for handle in self.roots():
+            handle.pause(reason)
 
     def resume_all(self) -> None:
-        """Resume every paused action."""
-        for handle in [h for h in self._running.values() if h._paused]:
-            self.resume_tree(handle)
+        """Resume every paused action (in start order: parents before their children)."""
+        for handle in list(self._running.values()):
+            handle.resume()
 
     # -- the watchdog -----------------------------------------------------
 
-    def _watch_later(self, handle: ActionHandle[Any], stage: int) -> None:
-        self._watch.append((self.loop.time() + self.cancel_grace, stage, handle))
-        self._arm_watchdog()
-
-    def _arm_watchdog(self) -> None:
-        """Arm the watchdog's timer at the earliest deadline, unless it is armed already."""
-        if self._watch and self._watch_timer is None:
-            self._watch_timer = self.loop.call_at(self._watch[0][0], self._watchdog)
-
-    def _watchdog(self) -> None:
-        self._watch_timer = None
-        now = self.loop.time()
-        watch = self._watch
-        while watch and watch[0][0] <= now:
-            _, stage, handle = watch.popleft()
-            if not handle.done():
-                self._overdue(handle, stage)
-        self._arm_watchdog()  # unless `_overdue` armed it already
-
-    def _overdue(self, handle: ActionHandle[Any], stage: int) -> None:
+    def _overdue(self, handle: ActionHandle[Any], stage: Stage) -> bool:
+        """The grace ladder's step for a cancelled action; return whether to go on watching."""
+        if handle.done():
+            return False
+        elapsed = self.cancel_grace if stage is Stage.ESCALATE else 2 * self.cancel_grace
         finishing = handle.state is ActionState.FINISHING
-        if finishing or stage == _ABANDON:
+        if finishing or stage is Stage.ABANDON:
             # A body still running is cancelled again below, and with it the cleanup
             # it awaits; what it started and did not await is cut once it is over.
-            self._cut_cleanup(handle, stage * self.cancel_grace, warn=finishing)
+            self._cut_cleanup(handle, elapsed, warn=finishing)
         if finishing:
             # Its body is over: it only waits for its children, each of which the
             # watchdog bounds on its own (abandoning it would orphan them).
-            return
+            return False
         where = handle.location() or "an unknown place"
-        if stage == _ESCALATE:
+        if stage is Stage.ESCALATE:
             self.log.warning(
                 "action %s#%d still running %.3g s after cancellation, at %s; cancelling it again",
                 handle.name,
@@ -442,23 +332,23 @@ class Executive:
                 where,
             )
             handle._interrupt()
-            self._watch_later(handle, _ABANDON)
             if self.instruments.items:
                 now = self.loop.time()
                 self.instruments.emit(CancelEscalated(now, handle.id, handle.name, where))
-            return
+            return True
         self.log.error(
             "action %s#%d ignored cancellation for %.3g s, at %s; abandoning it (its body is "
             "ended; its resources stay held until its task ends)",
             handle.name,
             handle.id,
-            2 * self.cancel_grace,
+            elapsed,
             where,
         )
         if self.instruments.items:
             now = self.loop.time()
             self.instruments.emit(ActionAbandonment(now, handle.id, handle.name, where))
-        handle._abandon(2 * self.cancel_grace)
+        handle._abandon(elapsed)
+        return False
 
     def _cut_cleanup(self, handle: ActionHandle[Any], elapsed: float, *, warn: bool) -> None:
         """Cancel the cleanup actions ``handle`` started that outlast its grace.
@@ -466,7 +356,7 @@ class Executive:
         With ``warn`` False (its body still runs, and the warning about it says
         where), they are cancelled without a warning of their own.
         """
-        late = [child for child in handle._children if not child._cancel_requested]
+        late = [child for child in handle.children if not child.cancel_requested]
         for child in late:
             if not warn:
                 child.cancel(f"cleanup of {handle.name}#{handle.id} ran past cancel_grace")
@@ -497,7 +387,7 @@ class Executive:
 
     def roots(self) -> list[ActionHandle[Any]]:
         """The running actions of the root scope (started outside any action)."""
-        return list(self._roots)
+        return [handle for handle in self._running.values() if handle.parent is None]
 
 
 def _check_options(max_actions: object, cancel_grace: object) -> None:

@@ -1,78 +1,111 @@
-"""ActionHandle: one running action, its outcome, and the task that drives it.
+"""ActionHandle: one running action, its outcome, and the task that runs it.
 
-The task runs `drive`, which wraps the user's coroutine: it records the
-outcome, cancels and awaits the children still running when the body ends, runs
-the finalizers (resource release) and only then marks the handle done. The task
-itself always ends normally, so nothing leaks as "exception never retrieved".
-A handle works with ``asyncio.wait``, ``asyncio.gather`` and
+The handle owns its action's whole story, and writes all of its state. Its
+task runs `ActionHandle._run`: the body (through the pause trampoline,
+`Stepped`), then the wind-up: record the outcome, cancel and await the
+children still running when the body ended, run the finalizers (resource
+release) and only then mark the handle done. Cancelling walks the subtree
+here, each action marking itself and cancelling its task, whose coroutine
+above settles the handle: handle, task, handle. Pausing and suspending walk
+it here too, through each action's `Freeze`. The executive that started it
+(its `Host`) keeps the registry, watches cancelled actions with the grace
+ladder, and tells the instruments.
+
+The task itself always ends normally, so nothing leaks as "exception never
+retrieved". A handle works with ``asyncio.wait``, ``asyncio.gather`` and
 ``asyncio.as_completed`` as a future does: done-callbacks receive the handle.
-(Over 400 lines: the handle and the task that drives it are one state machine,
+(Over 400 lines: the handle and the task that runs it are one state machine,
 kept in one place.)
 """
 
 from __future__ import annotations
 
 import asyncio
-import enum
 import traceback
 import weakref
+from contextvars import ContextVar
 from threading import get_ident
-from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar
 
 from .._core._loops import running_here, wrong_loop
+from .._core._waiting import Countdown
 from .._exceptions import ActionAbandoned, ActionInterrupted, ActionSkipped
-from ._context import current_action
-from ._pause import Stepped, frozen, frozen_time
-from ._phases import DONE, FINISHING, PENDING, RUNNING
+from ._pause import Freeze, Hook, Stepped, run_hooks
+from ._states import ActionState, Outcome
 from ._where import definition, location
 
 if TYPE_CHECKING:
-    from collections.abc import Awaitable, Callable, Coroutine, Generator
+    from collections.abc import Callable, Coroutine, Generator, Iterable
     from types import TracebackType
 
+    from .._core._instrument import Instruments
     from .._core._logging import ScopedLogger
-    from ._executive import Executive
+    from ..resources import ResourceManager
+    from ._pause import Hooks
 
 T = TypeVar("T")
-Hooks = tuple["Callable[[Any], object] | None", "Callable[[Any], object] | None"]
-"""An action's pause and resume hooks, each called with the robot (or None)."""
+
+_new = object.__new__
+# A waiter is an asyncio.Future (the C one): its methods, called unbound, are specialized
+# calls on Python 3.11 (a bound method call on an instance with a dict slot is not).
+_done, _set_result = asyncio.Future.done, asyncio.Future.set_result
+# Enum members as module globals: on Python 3.11 each ``Outcome.X`` is a slow class lookup
+# (70 ns, through the enum's metaclass), and the hot paths read several.
+PENDING, RUNNING = ActionState.PENDING, ActionState.RUNNING
+FINISHING, DONE = ActionState.FINISHING, ActionState.DONE
+"""The phases a handle goes through, in order (its other states are read from `RUNNING`)."""
+CANCELLING, PAUSED, WAITING = ActionState.CANCELLING, ActionState.PAUSED, ActionState.WAITING
+NOT_DONE, SUCCEEDED, FAILED = Outcome.NOT_DONE, Outcome.SUCCEEDED, Outcome.FAILED
+CANCELLED, SKIPPED = Outcome.CANCELLED, Outcome.SKIPPED
+
+current_action: ContextVar[ActionHandle[Any] | None] = ContextVar(
+    "pyrobots_aio.current_action", default=None
+)
+"""The action whose body (or cleanup) the running task belongs to; None outside actions."""
 
 
-class Outcome(enum.Enum):
-    """How an action ended; ``NOT_DONE`` while it is pending, waiting or running."""
+class Host(Protocol):
+    """What a handle needs of the executive that started it (`Executive` is one)."""
 
-    NOT_DONE = "not_done"
-    SUCCEEDED = "succeeded"
-    FAILED = "failed"
-    CANCELLED = "cancelled"
-    SKIPPED = "skipped"
+    owner: object
+    """The robot, given to pause hooks."""
+    thread: str
+    thread_ident: int
+    clock: Callable[[], float]
+    log: ScopedLogger
+    instruments: Instruments
+    resources: ResourceManager[Any]
 
+    @property
+    def is_running(self) -> bool:
+        """Whether the robot runs (its loop is `loop`)."""
 
-class ActionState(enum.Enum):
-    """Where an action is in its life, as `ActionInfo.state` reports it."""
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop:
+        """The robot's loop."""
 
-    PENDING = "pending"
-    """Started, its task not yet scheduled."""
-    WAITING = "waiting"
-    """Waiting for a resource."""
-    RUNNING = "running"
-    CANCELLING = "cancelling"
-    """Cancellation requested; its cleanup is running."""
-    PAUSED = "paused"
-    """Frozen where it stands: it or an ancestor was paused (`ActionHandle.pause`).
+    def started(self, handle: ActionHandle[Any]) -> None:
+        """The body of ``handle`` starts (called only when instruments listen)."""
 
-    Or suspended: a ``@lock(..., preempt="suspend")`` request borrows its resource.
-    """
-    FINISHING = "finishing"
-    """Its body has ended; its children are being cancelled and awaited."""
-    DONE = "done"
+    def finished(self, handle: ActionHandle[Any]) -> None:
+        """``handle`` is done: forget it."""
 
+    def cancelling(
+        self, handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
+    ) -> None:
+        """Cancellation of ``handle`` is requested: bound its cleanup in time."""
 
-_PHASE_STATES = {
-    PENDING: ActionState.PENDING,
-    FINISHING: ActionState.FINISHING,
-    DONE: ActionState.DONE,
-}
+    def froze(
+        self,
+        handle: ActionHandle[Any],
+        nodes: list[ActionHandle[Any]],
+        reason: str | None,
+        by: ActionHandle[Any] | None,
+    ) -> None:
+        """Pausing or suspending ``handle`` froze ``nodes``."""
+
+    def thawed(self, handle: ActionHandle[Any], nodes: list[ActionHandle[Any]]) -> None:
+        """Resuming or unsuspending ``handle`` thawed ``nodes``."""
 
 
 class ActionHandle(Generic[T]):
@@ -96,92 +129,115 @@ class ActionHandle(Generic[T]):
     __slots__ = (
         "__weakref__",
         "_callbacks",
-        "_cancel_by",
-        "_cancel_reason",
-        "_cancel_requested",
+        "_cancel",
         "_children",
         "_coro",
         "_error",
         "_executive",
         "_finalizers",
         "_fn",
-        "_frozen_since",
-        "_frozen_total",
+        "_freeze",
         "_hooks",
         "_internal",
         "_loop",
         "_outcome",
-        "_pause_reason",
-        "_paused",
-        "_paused_by",
         "_phase",
-        "_suspended",
         "_task",
-        "_thaw",
         "_unretrieved",
         "_value",
         "_waiters",
-        "awaiting",
         "finished_at",
-        "held",
         "id",
         "name",
         "parent",
-        "spawned_at",
         "started_at",
     )
 
-    def __init__(
-        self,
-        executive: Executive,
+    id: int
+    name: str
+    parent: ActionHandle[Any] | None
+    started_at: float | None
+    finished_at: float | None
+    _executive: Host
+    _loop: asyncio.AbstractEventLoop
+    _fn: Callable[..., object]
+    _hooks: Hooks | None
+    _phase: ActionState
+    _outcome: Outcome
+    _value: T | None
+    _error: BaseException | None
+    _coro: Coroutine[Any, Any, T] | None
+    _task: asyncio.Task[None] | None
+    _children: dict[ActionHandle[Any], None] | None
+    _cancel: tuple[str | None, ActionHandle[Any] | None] | None
+    """Why and by whom cancellation was requested, once it was."""
+    _freeze: Freeze | None
+    _waiters: list[asyncio.Future[None]] | None
+    _callbacks: list[Callable[[ActionHandle[T]], object]] | None
+    _internal: list[Callable[[ActionHandle[T]], object]] | None
+    _finalizers: list[Callable[[], None]] | None
+    _unretrieved: weakref.finalize[Any, Any] | None
+
+    @classmethod
+    def _start(  # noqa: PLR0917 (every action pays for each call: positional is the cheapest)
+        cls,
+        executive: Host,
         loop: asyncio.AbstractEventLoop,
         ident: int,
         name: str,
         parent: ActionHandle[Any] | None,
-        *,
-        spawned_at: float,
-    ) -> None:
+        fn: Callable[..., object],
+        hooks: Hooks | None,
+        coro: Coroutine[Any, Any, T],
+    ) -> ActionHandle[T]:
+        """Start ``coro`` (made by the action function ``fn``) as the task of a new action.
+
+        Not ``__init__``: calling a class costs an action a tenth more than this
+        (Python 3.11 calls ``__init__`` through the generic path, with an argument tuple).
+        """
+        self: ActionHandle[T] = _new(cls)
         self._executive = executive
         self._loop = loop
         self.id = ident
         self.name = name
         self.parent = parent
-        self.spawned_at = spawned_at
-        self.started_at: float | None = None
-        self.finished_at: float | None = None
-        self.held: tuple[str, ...] = ()
-        self.awaiting: tuple[str, ...] = ()
-        self._children: dict[ActionHandle[Any], None] = {}
-        self._task: asyncio.Task[None] | None = None
-        self._coro: Coroutine[Any, Any, T] | None = None
-        self._fn: Callable[..., object] | None = None
+        self._fn = fn
+        self._hooks = hooks
+        self.started_at = None
+        self.finished_at = None
         self._phase = PENDING
-        self._outcome = Outcome.NOT_DONE
-        self._value: T | None = None
-        self._error: BaseException | None = None
-        self._cancel_requested = False
-        self._cancel_reason: str | None = None
-        self._cancel_by: ActionHandle[Any] | None = None
-        self._waiters: list[asyncio.Future[None]] | None = None
-        self._callbacks: list[Callable[[ActionHandle[T]], object]] | None = None
-        self._internal: list[Callable[[ActionHandle[T]], object]] | None = None
-        self._finalizers: list[Callable[[], None]] | None = None
-        self._unretrieved: weakref.finalize[Any, Any] | None = None
-        self._paused = False
-        self._pause_reason: str | None = None
-        self._paused_by: ActionHandle[Any] | None = None
-        self._suspended: str | None = None
-        """The reason of the suspension that lends its resources to a preemptor, if any."""
-        self._frozen_since: float | None = None
-        self._frozen_total = 0.0
-        self._thaw: asyncio.Future[None] | None = None
-        self._hooks: Hooks | None = None
+        self._outcome = NOT_DONE
+        self._value = None
+        self._error = None
+        self._coro = coro  # (`location` reads it only once the body runs)
+        self._children = None
+        self._cancel = None
+        self._freeze = None
+        self._waiters = None
+        self._callbacks = None
+        self._internal = None
+        self._finalizers = None
+        self._unretrieved = None
+        if parent is not None:
+            parent._adopt(self)
+        self._task = loop.create_task(self._run(coro), name=f"{name}#{ident}")
+        return self
+
+    def _adopt(self, child: ActionHandle[Any]) -> None:
+        """Take ``child`` as a child; a child of a frozen action starts frozen."""
+        if self._children is None:
+            self._children = {child: None}
+        else:
+            self._children[child] = None
+        freeze = self._freeze
+        if freeze is not None and freeze.since is not None:
+            child._frozen_from(self._loop.time())
 
     # -- awaiting ---------------------------------------------------------
 
     def __await__(self) -> Generator[Any, None, T]:
         # A generator, with its helpers inlined: every awaited action pays for this.
-        if self._phase != DONE:
+        if self._phase is not DONE:
             loop = self._loop
             if get_ident() != self._executive.thread_ident or not loop.is_running():
                 what = f"await action {self.name}#{self.id}"  # running_here(), inlined
@@ -194,12 +250,12 @@ class ActionHandle(Generic[T]):
             try:
                 yield from fut
             except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
-                reason = "the task awaiting it was cancelled"
-                self._executive.cancel_tree(self, reason, current_action.get())
+                self._forget_waiter(fut)
+                self._cancel_subtree("the task awaiting it was cancelled", current_action.get())
                 raise
-            finally:
-                if not fut.done() and self._waiters is not None:
-                    self._waiters.remove(fut)
+            except BaseException:  # closed, or something else thrown in: it waits no more
+                self._forget_waiter(fut)
+                raise
         if self._unretrieved is not None:
             self._retrieved()
         if self._error is not None:
@@ -226,7 +282,7 @@ class ActionHandle(Generic[T]):
         ``asyncio.timeout`` expired) leaves the action running. ``await handle``
         owns it instead.
         """
-        if self._phase != DONE:
+        if self._phase is not DONE:
             fut = self._waiter("wait for")
             try:
                 await fut
@@ -238,7 +294,7 @@ class ActionHandle(Generic[T]):
     def _waiter(self, verb: str) -> asyncio.Future[None]:
         """A future the action's end completes; the caller must be on the robot's loop."""
         self._check_here(verb)
-        fut = self._loop.create_future()
+        fut: asyncio.Future[None] = asyncio.Future(loop=self._loop)
         if self._waiters is None:
             self._waiters = [fut]
         else:
@@ -257,50 +313,64 @@ class ActionHandle(Generic[T]):
             raise wrong_loop(what, self._loop, self._executive.thread)
 
     def _forget_waiter(self, fut: asyncio.Future[None]) -> None:
-        if not fut.done() and self._waiters is not None:
+        if not _done(fut) and self._waiters is not None:
             self._waiters.remove(fut)
 
     # -- inspecting -------------------------------------------------------
 
     @property
     def outcome(self) -> Outcome:
-        """The outcome so far (`Outcome.NOT_DONE` until the action is done)."""
+        """The outcome so far (`NOT_DONE` until the action is done)."""
         return self._outcome
 
     @property
     def state(self) -> ActionState:
         """Where the action is now (pending, waiting, running, cancelling, finishing, done)."""
+        return self._state(bool(self._executive.resources.awaited_by(self)))
+
+    def _state(self, waiting: bool) -> ActionState:
+        """`state`, given whether the action waits for a resource (its manager's answer)."""
         phase = self._phase
-        if phase != RUNNING:
-            return _PHASE_STATES[phase]
-        if self._cancel_requested:
-            return ActionState.CANCELLING
-        if self._executive.paused and frozen(self):
-            return ActionState.PAUSED
-        return ActionState.WAITING if self.awaiting else ActionState.RUNNING
+        if phase is not RUNNING:
+            return phase
+        if self._cancel is not None:
+            return CANCELLING
+        if self._freeze is not None and self._freeze.since is not None:
+            return PAUSED
+        return WAITING if waiting else RUNNING
+
+    @property
+    def held(self) -> tuple[str, ...]:
+        """Names of the resources it holds (the robot's resource manager answers)."""
+        return self._executive.resources.held_by(self)
+
+    @property
+    def awaiting(self) -> tuple[str, ...]:
+        """Names of the resources it waits for (the robot's resource manager answers)."""
+        return self._executive.resources.awaited_by(self)
 
     @property
     def children(self) -> tuple[ActionHandle[Any], ...]:
         """The children of this action that are still running, oldest first."""
-        return tuple(self._children)
+        return () if self._children is None else tuple(self._children)
 
     @property
     def cancel_reason(self) -> str | None:
         """The reason given when cancellation was requested, or None."""
-        return self._cancel_reason
+        return None if self._cancel is None else self._cancel[0]
 
     @property
     def cancel_requested(self) -> bool:
         """Whether cancellation of this action has been requested."""
-        return self._cancel_requested
+        return self._cancel is not None
 
     def done(self) -> bool:
         """Return True once the action has finished (any outcome), cleanup and children included."""
-        return self._phase == DONE
+        return self._phase is DONE
 
     def cancelled(self) -> bool:
-        """Return True if the action finished with outcome `Outcome.CANCELLED`."""
-        return self._outcome is Outcome.CANCELLED
+        """Return True if the action finished with outcome `CANCELLED`."""
+        return self._outcome is CANCELLED
 
     def result(self) -> T:
         """Return the result of a finished action, or raise what awaiting it would raise.
@@ -319,7 +389,7 @@ class ActionHandle(Generic[T]):
         Raises:
             asyncio.InvalidStateError: The action is not done yet.
         """
-        if self._phase != DONE:
+        if self._phase is not DONE:
             msg = f"action {self.name}#{self.id} is not done yet; await it or use wait_done()"
             raise asyncio.InvalidStateError(msg)
         self._retrieved()
@@ -336,7 +406,7 @@ class ActionHandle(Generic[T]):
 
     def location(self) -> str | None:
         """Return the ``file:line`` where the action's body is now suspended, if it runs."""
-        if self._coro is None or self._phase != RUNNING:
+        if self._coro is None or self._phase is not RUNNING:
             return None
         where = location(self._coro)
         if where is None and self._fn is not None:  # only internal frames: waiting for a lock
@@ -355,11 +425,77 @@ class ActionHandle(Generic[T]):
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(handle.cancel, reason)``).
         """
-        if self._phase == DONE:
+        if self._phase is DONE:
             return False
         self._check_here("cancel")
-        self._executive.cancel_tree(self, reason, current_action.get())
+        self._cancel_subtree(reason, current_action.get())
         return True
+
+    def _cancel_subtree(self, reason: str | None, by: ActionHandle[Any] | None) -> None:
+        """Cancel this action and every descendant it has now, recording who and why.
+
+        An action already cancelled is passed over with its subtree: what it
+        started since its cancellation is its cleanup, which a second cancel
+        never cuts short (the executive's grace ladder bounds it, counted from
+        the first). Each cancelled action thaws (its cleanup runs), its task is
+        cancelled, and its executive starts watching it.
+        """
+        stack: list[ActionHandle[Any]] = [self]
+        while stack:
+            node = stack.pop()
+            if node._cancel is not None or node._phase is DONE:
+                continue
+            if node._children:
+                stack.extend(node._children)
+            node._cancel = (reason, by)
+            if node._freeze is not None:
+                node._freeze.end(node._loop.time())
+            node._interrupt()
+            node._executive.cancelling(node, reason, by)
+
+    def _interrupt(self) -> None:
+        """Throw `ActionCancelled` into the body at its current await, if the body runs.
+
+        A pending action is not touched: `_run` sees the request and never starts
+        the body; a finishing one only waits for its (cancelled) children.
+        """
+        if self._phase is RUNNING and self._task is not None and self._cancel is not None:
+            self._task.cancel(self._cancel[0])
+
+    def _abandon(self, after: float) -> None:
+        """Declare the action done (CANCELLED), then end its body and its task.
+
+        `ActionAbandoned` (a ``BaseException``: ``except Exception`` and ``except
+        ActionCancelled`` let it through) is thrown into the body at its current
+        ``await``, and its task is cancelled, so that it ends and nothing (not
+        ``asyncio.run``) waits for it forever. A body that catches even that
+        runs on; its resources are released when its task has really ended.
+        """
+        task, body = self._task, self._coro if self._phase is RUNNING else None
+        self._settle(CANCELLED, error=self._interrupted())
+        self._complete(False)
+        if task is None or task.done() or body is None:
+            return
+        try:
+            body.throw(
+                ActionAbandoned(
+                    f"action {self.name}#{self.id} ignored cancellation for {after:.3g} s"
+                )
+            )
+        except BaseException:  # the body ended, as it should: its task is cancelled below
+            resisted = False
+        else:  # it caught even that, and awaits again
+            resisted = True
+        if resisted:
+            self._executive.log.error(
+                "action %s#%d resisted being abandoned (it catches BaseException); its task "
+                "and its resources live on until it ends",
+                self.name,
+                self.id,
+            )
+        task.cancel("abandoned: it ignored cancellation")
+
+    # -- pausing ----------------------------------------------------------
 
     def pause(self, reason: str | None = None) -> bool:
         """Freeze this action and its subtree where they stand, without unwinding them.
@@ -397,10 +533,12 @@ class ActionHandle(Generic[T]):
             >>> run(main)  # ten frozen seconds in the middle of the second tick
             [1.0, 12.0, 13.0]
         """
-        if self._phase == DONE:
+        if self._phase is DONE:
             return False
         self._check_here("pause")
-        self._executive.pause_tree(self, reason, current_action.get())
+        by = current_action.get()
+        self._freezing().pause(reason, by)
+        self._froze(reason, by)
         return True
 
     def resume(self) -> bool:
@@ -412,18 +550,49 @@ class ActionHandle(Generic[T]):
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(handle.resume)``).
         """
-        if self._phase == DONE:
+        if self._phase is DONE:
             return False
         self._check_here("resume")
-        if not self._paused:
+        if self._freeze is None or not self._freeze.paused:
             return False
-        self._executive.resume_tree(self)
+        self._freeze.unpause()
+        self._thawed()
         return True
+
+    def suspend(self, reason: str, by: object = None) -> None:
+        """Freeze this subtree while ``by`` borrows its resources (a ``preempt="suspend"`` loan).
+
+        The resources layer's call (see `pyrobots_aio.resources.Owner`); programs
+        use `pause`. It freezes as a pause does, apart from any pause: `resume`
+        does not end it, `unsuspend` does. Nothing happens if the action is done.
+
+        Raises:
+            EventLoopError: Called from another thread.
+        """
+        if self._phase is DONE:
+            return
+        self._check_here("suspend")
+        self._freezing().suspend(reason)
+        self._froze(reason, by if isinstance(by, ActionHandle) else None)
+
+    def unsuspend(self) -> None:
+        """End the suspension: thaw what is no longer frozen, run the resume hooks.
+
+        Raises:
+            EventLoopError: Called from another thread.
+        """
+        if self._phase is DONE:
+            return
+        self._check_here("unsuspend")
+        if self._freeze is None or self._freeze.suspended is None:
+            return
+        self._freeze.unsuspend()
+        self._thawed()
 
     @property
     def paused(self) -> bool:
         """Whether it is frozen: paused itself, or under a paused ancestor (and not cancelled)."""
-        return bool(self._executive.paused) and frozen(self)
+        return self._freeze is not None and self._freeze.since is not None
 
     @property
     def pause_reason(self) -> str | None:
@@ -433,27 +602,80 @@ class ActionHandle(Generic[T]):
         request borrows its resource), the suspension's reason, which names the
         preemptor.
         """
-        return self._pause_reason if self._paused else self._suspended
+        freeze = self._freeze
+        if freeze is None:
+            return None
+        return freeze.reason if freeze.paused else freeze.suspended
 
     def frozen_time(self) -> float:
         """Seconds (on the robot's clock) this action has spent frozen so far."""
-        return frozen_time(self)
+        return 0.0 if self._freeze is None else self._freeze.spent(self._loop.time())
 
-    # -- executive side ---------------------------------------------------
+    def _freezing(self) -> Freeze:
+        """This action's `Freeze`, made the first time it is needed."""
+        if self._freeze is None:
+            self._freeze = Freeze()
+        return self._freeze
 
-    def _suspend(self, reason: str, by: object) -> None:
-        """Freeze this subtree while a preemptor borrows its resource (the resources layer's call).
+    def _frozen_from(self, now: float) -> None:
+        """Start a frozen spell at ``now`` (this action is frozen from its start)."""
+        self._freezing().begin(now)
 
-        Apart from any pause: `resume` does not end it, `_unsuspend` does.
+    def _froze(self, reason: str | None, by: ActionHandle[Any] | None) -> None:
+        """Freeze the subtree of this action, which was just paused or suspended.
+
+        Each action in it that was not frozen yet starts a spell (deepest
+        first); the walk stops at cancelled actions, whose cleanup runs on.
         """
-        if self._phase != DONE:
-            borrower = by if isinstance(by, ActionHandle) else None
-            self._executive.suspend_tree(self, reason, borrower)
+        now = self._loop.time()
+        newly = [node for node in self._subtree() if node._freezing().begin(now)]
+        newly.reverse()
+        executive = self._executive
+        executive.froze(self, newly, reason, by)
+        run_hooks(newly, Hook.PAUSE, executive.owner, executive.log)  # type: ignore[arg-type]
 
-    def _unsuspend(self) -> None:
-        """End the suspension: thaw what is no longer paused, run the resume hooks."""
-        if self._phase != DONE:
-            self._executive.unsuspend_tree(self)
+    def _thawed(self) -> None:
+        """Thaw what in this subtree nothing freezes any more (parents first), after a resume."""
+        now = self._loop.time()
+        thawed = []
+        for node in self._subtree():
+            freeze = node._freeze
+            if freeze is not None and freeze.since is not None and not node._held_frozen():
+                freeze.end(now)
+                thawed.append(node)
+        executive = self._executive
+        executive.thawed(self, thawed)
+        run_hooks(thawed, Hook.RESUME, executive.owner, executive.log)  # type: ignore[arg-type]
+
+    def _subtree(self) -> list[ActionHandle[Any]]:
+        """This action and its descendants that may freeze (parents first).
+
+        A cancelled action is left out with its subtree (cancellation thawed
+        them; what they start is their cleanup), and so is one that is done.
+        """
+        found = []
+        stack: list[ActionHandle[Any]] = [self]
+        while stack:
+            node = stack.pop()
+            if node._cancel is not None or node._phase is DONE:
+                continue
+            found.append(node)
+            if node._children:
+                stack.extend(reversed(node._children))
+        return found
+
+    def _held_frozen(self) -> bool:
+        """Whether it or an ancestor is paused or suspended, with no cancellation on the way."""
+        node: ActionHandle[Any] | None = self
+        while node is not None:
+            if node._cancel is not None:
+                return False
+            if node._freeze is not None and node._freeze.holds:
+                return True
+            node = node.parent
+        return False
+
+    # -- ending -----------------------------------------------------------
 
     def add_finalizer(self, finalizer: Callable[[], None]) -> None:
         """Run ``finalizer()`` when the action ends, after its children, before it is done.
@@ -474,7 +696,7 @@ class ActionHandle(Generic[T]):
         once if it already is. An exception in it is logged with its traceback on
         ``pyrobots_aio.actions`` and disturbs nothing else.
         """
-        if self._phase == DONE:
+        if self._phase is DONE:
             _schedule(callback, self)
             return
         if self._callbacks is None:
@@ -500,102 +722,148 @@ class ActionHandle(Generic[T]):
             self._internal = []
         self._internal.append(callback)
 
-    def _interrupt(self) -> None:
-        """Throw `ActionCancelled` into the body at its current await, if the body runs.
-
-        A pending action is not touched: `drive` sees the request and never starts
-        the body; a finishing one only waits for its (cancelled) children.
-        """
-        if self._phase == RUNNING and self._task is not None:
-            self._task.cancel(self._cancel_reason)
-
-    def _abandon(self, after: float) -> None:
-        """Declare the action done (CANCELLED), then end its body and its task.
-
-        `ActionAbandoned` (a ``BaseException``: ``except Exception`` and ``except
-        ActionCancelled`` let it through) is thrown into the body at its current
-        ``await``, and its task is cancelled, so that it ends and nothing (not
-        ``asyncio.run``) waits for it forever. A body that catches even that
-        runs on; its resources are released when its task has really ended.
-        """
-        task, body = self._task, self._coro
-        self._settle(Outcome.CANCELLED, error=self._interrupted())
-        self._complete(release=False)
-        if task is None or task.done() or body is None:
-            return
+    async def _run(self, coro: Coroutine[Any, Any, T]) -> None:  # noqa: PLR0912 (flat: hot)
+        """Run the body in this action's task, then wind the action up (the task's coroutine)."""
+        current_action.set(self)
         try:
-            body.throw(
-                ActionAbandoned(
-                    f"action {self.name}#{self.id} ignored cancellation for {after:.3g} s"
-                )
-            )
-        except BaseException:  # the body ended, as it should: its task is cancelled below
-            resisted = False
-        else:  # it caught even that, and awaits again
-            resisted = True
-        if resisted:
-            self._executive.log.error(
-                "action %s#%d resisted being abandoned (it catches BaseException); its task "
-                "and its resources live on until it ends",
-                self.name,
-                self.id,
-            )
-        task.cancel("abandoned: it ignored cancellation")
+            never_ran = self._cancel is not None  # a local: the attribute changes while it runs
+            if never_ran:  # cancelled before it ever ran: the body never starts
+                coro.close()
+                self._settle(CANCELLED, error=self._interrupted())
+            else:
+                self._phase = RUNNING
+                executive = self._executive
+                clock = executive.clock
+                self.started_at = clock()
+                if executive.instruments.items:
+                    executive.started(self)
+                try:
+                    if self._freeze is None:  # its first step runs here: most bodies end in it
+                        try:
+                            step = coro.send(None)
+                        except StopIteration as end:
+                            value = end.value
+                        else:  # it awaits: the rest goes through the trampoline
+                            value = await Stepped(self, coro, step)
+                    else:  # frozen from its start (a child of a frozen action)
+                        value = await Stepped(self, coro)
+                except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
+                    self._settle(FAILED, error=exc)
+                    self._complete()
+                    raise
+                except BaseException as exc:
+                    if self._phase is DONE:  # abandoned: how its body ends changes nothing
+                        return
+                    _settle_error(self, exc)
+                else:
+                    if self._phase is DONE:
+                        return
+                    if self._cancel is not None:  # cancellation swallowed: still CANCELLED
+                        self._settle(CANCELLED, value, self._interrupted())
+                    else:
+                        self._outcome = SUCCEEDED
+                        self._value = value
+            self._phase = FINISHING
+            if self._children:
+                await self._reap()
+            if self._cancel is not None and self._outcome is SUCCEEDED:
+                # cancelled while its children wound up: CANCELLED (a failure is never masked)
+                self._settle(CANCELLED, error=self._interrupted())
+            self._complete()
+        finally:  # an abandoned action releases its resources only once its task ends
+            if self._finalizers is not None:
+                self._run_finalizers()
+
+    async def _reap(self) -> None:
+        """Wait for the children still running when the body ended.
+
+        They are cancelled first, unless this action was itself cancelled: then
+        its children of that time are cancelled already, and those its cleanup
+        started run to their end (the grace ladder bounds them).
+        """
+        try:
+            while self._children:
+                children = list(self._children)
+                if self._cancel is None:
+                    reason = f"its parent {self.name}#{self.id} finished"
+                    for child in children:
+                        child._cancel_subtree(reason, self)
+                try:
+                    await all_done(children, self._loop)
+                except asyncio.CancelledError:
+                    # Meant for the body, which ended before it arrived (it returned without
+                    # awaiting again): the children still get waited for.
+                    continue
+        except BaseException:
+            self._complete()
+            raise
 
     def _interrupted(self, cause: BaseException | None = None) -> ActionInterrupted:
-        error = ActionInterrupted(self, self._cancel_reason, self._cancel_by)
+        reason, by = self._cancel if self._cancel is not None else (None, None)
+        error = ActionInterrupted(self, reason, by)
         error.__cause__ = cause
         return error
 
     def _settle(
         self, outcome: Outcome, value: Any = None, error: BaseException | None = None
     ) -> None:
-        if self._phase == DONE:  # abandoned by the watchdog: its outcome is already told
+        if self._phase is DONE:  # abandoned by the watchdog: its outcome is already told
             return
         self._outcome = outcome
         self._value = value
         self._error = error
 
-    def _complete(self, *, release: bool = True) -> None:
+    def _complete(self, release: bool = True) -> None:  # positional: a specialized call
         """Mark the action done and wake whoever waits for it (idempotent).
 
         With ``release`` False (an abandoned action) the finalizers wait for its
         task to end.
         """
-        if self._phase == DONE:
+        if self._phase is DONE:
             return
-        if release and self._finalizers is not None:
+        if self._finalizers is not None and release:
             self._run_finalizers()
-        executive = self._executive
-        if executive.paused and (self._paused or self._suspended is not None):
-            executive.unpause(self)
+        if self._freeze is not None:  # a done action is frozen no more
+            self._freeze.unpause()
+            self._freeze.unsuspend()
+            self._freeze.end(self._loop.time())
         self._phase = DONE
         self._coro = None
-        self.finished_at = executive.clock()
+        executive = self._executive
+        clock = executive.clock
+        self.finished_at = clock()
         if self._callbacks is not None:  # scheduled first: they run before awaiters resume
             callbacks, self._callbacks = self._callbacks, None
             for callback in callbacks:
                 _schedule(callback, self)
         waiting = False
-        if self._waiters is not None:
-            for fut in self._waiters:
-                if not fut.done():
-                    fut.set_result(None)
-                    waiting = True
+        waiters = self._waiters
+        if waiters is not None:
             self._waiters = None
+            for fut in waiters:
+                if not _done(fut):
+                    _set_result(fut, None)
+                    waiting = True
         self._task = None  # the task's context refers back to this handle
-        if self._outcome is Outcome.FAILED and not waiting:
+        if self._outcome is FAILED and not waiting:
             self._report_unless_retrieved()
+        if self.parent is not None:
+            self.parent._forget(self)
         executive.finished(self)
         if self._internal is not None:
             internal, self._internal = self._internal, None
             for callback in internal:
                 _call_back(callback, self)
 
+    def _forget(self, child: ActionHandle[Any]) -> None:
+        """``child`` is done: it is a running child no more."""
+        if self._children is not None:
+            self._children.pop(child, None)
+
     def _forgotten(self) -> bool:
         """Whether the action never started and nothing waits for it (a missing ``await``?)."""
         return self.started_at is None and not (
-            self._cancel_requested or self._waiters or self._callbacks
+            self._cancel is not None or self._waiters or self._callbacks
         )
 
     def _report_unless_retrieved(self) -> None:
@@ -634,82 +902,33 @@ class ActionHandle(Generic[T]):
         return f"<ActionHandle {self.name}#{self.id} {self.state.value}{parent}>"
 
 
-async def drive(  # noqa: PLR0912 (one flat coroutine: every action pays for each frame)
-    handle: ActionHandle[T], coro: Coroutine[Any, Any, T]
-) -> None:
-    """Run an action's body in its own task, then wind it up (the task's coroutine)."""
-    current_action.set(handle)
-    try:
-        never_ran = handle._cancel_requested  # a local: the attribute changes while it runs
-        if never_ran:  # cancelled before it ever ran: the body never starts
-            coro.close()
-            handle._settle(Outcome.CANCELLED, error=handle._interrupted())
-        else:
-            handle._coro = coro
-            handle._phase = RUNNING
-            executive = handle._executive
-            handle.started_at = executive.clock()
-            if executive.instruments.items:
-                executive.started(handle)
-            try:
-                value = await cast("Awaitable[T]", Stepped(handle, coro))
-            except (KeyboardInterrupt, SystemExit) as exc:  # record, then let through
-                handle._settle(Outcome.FAILED, error=exc)
-                handle._complete()
-                raise
-            except BaseException as exc:
-                if handle._phase == DONE:  # abandoned: how its body ends changes nothing
-                    return
-                _settle_error(handle, exc)
-            else:
-                if handle._phase == DONE:
-                    return
-                if handle._cancel_requested:  # cancellation swallowed: still CANCELLED
-                    handle._settle(Outcome.CANCELLED, value, handle._interrupted())
-                else:
-                    handle._outcome, handle._value = Outcome.SUCCEEDED, value
-        handle._phase = FINISHING
-        if handle._children:
-            await _reap(handle)
-        if handle._cancel_requested and handle._outcome is Outcome.SUCCEEDED:
-            # cancelled while its children wound up: CANCELLED (a failure is never masked)
-            handle._settle(Outcome.CANCELLED, error=handle._interrupted())
-        handle._complete()
-    finally:  # an abandoned action releases its resources only once its task ends
-        if handle._finalizers is not None:
-            handle._run_finalizers()
-
-
-async def _reap(handle: ActionHandle[Any]) -> None:
-    """Wait for the children still running when the body ended (the executive's rules)."""
-    try:
-        while handle._children:
-            try:
-                await handle._executive.reap_children(handle)
-            except asyncio.CancelledError:
-                # Meant for the body, which ended before it arrived (it returned without
-                # awaiting again): the children still get waited for.
-                continue
-    except BaseException:
-        handle._complete()
-        raise
+def all_done(
+    handles: Iterable[ActionHandle[Any]], loop: asyncio.AbstractEventLoop
+) -> asyncio.Future[None]:
+    """A future done once every handle is (awaiting it never cancels them)."""
+    pending = [h for h in handles if not h.done()]
+    countdown = Countdown(loop, len(pending))
+    tick = countdown.tick
+    for handle in pending:
+        handle._on_done(tick)
+    return countdown.future
 
 
 def _settle_error(handle: ActionHandle[Any], exc: BaseException) -> None:
     if isinstance(exc, asyncio.CancelledError):
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted())
+        handle._settle(CANCELLED, error=handle._interrupted())
     elif isinstance(exc, ActionSkipped) and exc.handle is None:
         # Its own lock request was refused. A skip that already names an action is a
         # child's, re-raised by awaiting it: for this action, an ordinary failure.
         exc.handle = handle
-        handle._settle(Outcome.SKIPPED, error=exc)
-    elif handle._cancel_requested:
+        handle._settle(SKIPPED, error=exc)
+    elif handle._cancel is not None:
         handle._executive.log.warning(
             "action %s#%d failed during its cleanup", handle.name, handle.id, exc_info=exc
         )
-        handle._settle(Outcome.CANCELLED, error=handle._interrupted(exc))
+        handle._settle(CANCELLED, error=handle._interrupted(exc))
     else:
-        handle._settle(Outcome.FAILED, error=exc.with_traceback(_from_the_body(exc)))
+        handle._settle(FAILED, error=exc.with_traceback(_from_the_body(exc)))
 
 
 def _from_the_body(error: BaseException) -> TracebackType | None:
@@ -725,7 +944,7 @@ def _from_the_body(error: BaseException) -> TracebackType | None:
     return tb
 
 
-_OWN_MODULES = frozenset({__name__, frozen.__module__})  # the task's and the trampoline's
+_OWN_MODULES = frozenset({__name__, Stepped.__module__})  # the task's and the trampoline's
 
 
 def _report_failure(log: ScopedLogger, name: str, ident: int, report: str) -> None:
@@ -734,7 +953,8 @@ def _report_failure(log: ScopedLogger, name: str, ident: int, report: str) -> No
 
 def _schedule(callback: Callable[[ActionHandle[Any]], object], handle: ActionHandle[Any]) -> None:
     """Run a done-callback soon on the robot's loop (at once if no loop runs any more)."""
-    loop = handle._executive._loop or asyncio._get_running_loop()
+    executive = handle._executive
+    loop = executive.loop if executive.is_running else asyncio._get_running_loop()
     if loop is None:
         _call_back(callback, handle)
     else:

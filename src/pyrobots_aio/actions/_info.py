@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from collections.abc import Iterable
 
-    from ._handle import ActionHandle, ActionState
+    from ._handle import ActionHandle
+    from ._states import ActionState
 
 
 _UNREAD = object()
@@ -49,13 +50,14 @@ class ActionInfo:
         # The fields go straight into their slots: a frozen dataclass's __init__ sets each
         # through object.__setattr__, which made this twice as slow (robot.running() takes
         # a snapshot of every running action).
+        held, awaiting = handle._executive.resources.holdings(handle)
         info = _new(cls)
         _set_handle(info, handle)
-        _set_state(info, handle.state)
+        _set_state(info, handle._state(bool(awaiting)))
         _set_started_at(info, handle.started_at)
-        _set_held(info, handle.held)
-        _set_awaiting(info, handle.awaiting)
-        _set_cancel_reason(info, handle._cancel_reason)
+        _set_held(info, held)
+        _set_awaiting(info, awaiting)
+        _set_cancel_reason(info, handle.cancel_reason)
         _set_where(info, _UNREAD)
         return info
 

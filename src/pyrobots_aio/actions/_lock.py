@@ -24,8 +24,8 @@ from .._exceptions import InvalidResourceError, LockUsageError
 from ..resources import ResourceManager
 from ..resources._grant import Options, Preempt, check_options
 from ..resources._resource import check_resource
-from ._context import current_action
 from ._decorator import Action
+from ._handle import current_action
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine

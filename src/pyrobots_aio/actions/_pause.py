@@ -1,116 +1,191 @@
 """Pause and resume: freeze an action's subtree where it stands, without unwinding it.
 
-An action is *frozen* while it or one of its ancestors is paused and no
-cancellation was requested for it (cancellation reaches a paused action at
-once, and its cleanup must run). Its body runs through `Stepped`, which
-forwards each ``send``/``throw`` of the task to the body: whatever the body
-awaits (``robot.sleep``, a raw ``asyncio.sleep``, a socket) may complete
-meanwhile, but the body is not resumed until the action thaws. So a body
-frozen after ``await asyncio.sleep(5)`` does not reach the ``robot.drive(...)``
-that follows it.
+An action is *frozen* while it or one of its ancestors is paused (or
+suspended, its resource lent) and no cancellation was requested on the way
+(cancellation reaches a paused action at once, and its cleanup must run).
+Its body runs through `Stepped`, which forwards each ``send``/``throw`` of the
+task to the body: whatever the body awaits (``robot.sleep``, a raw
+``asyncio.sleep``, a socket) may complete meanwhile, but the body is not
+resumed until the action thaws. So a body frozen after ``await
+asyncio.sleep(5)`` does not reach the ``robot.drive(...)`` that follows it.
 
-Each handle counts the time it spent frozen, so that `Robot.sleep` does not
-count it. Pause hooks (``@action(on_pause=..., on_resume=...)``) are called
+The handle keeps what pausing needs in a `Freeze`, made the first time the
+action freezes (most never do): why it is paused or suspended, the frozen
+clock (so that `Robot.sleep` does not count frozen time) and the thaw future
+its task waits on. The handle walks its subtree and writes these through the
+`Freeze` methods; an action that never froze pays one ``is None`` test per
+resumption. Pause hooks (``@action(on_pause=..., on_resume=...)``) are called
 with the robot when the action freezes and thaws: motion actions stop the
-wheels there. A robot that never pauses pays one counter test per resumption.
+wheels there.
 """
 
 from __future__ import annotations
 
 import asyncio
+import enum
 import inspect
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
-
-from ._phases import DONE
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar
 
 if TYPE_CHECKING:
-    from collections.abc import Coroutine, Iterator
+    from collections.abc import Callable, Coroutine, Generator
 
-    from ._handle import ActionHandle
+    from .._core._logging import ScopedLogger
 
 T = TypeVar("T")
 
 
-def frozen(handle: ActionHandle[Any]) -> bool:
-    """Whether ``handle`` is paused or suspended, or under such an ancestor, and not cancelled.
+class Freeze:
+    """An action's pause, its suspension and its frozen clock (owned by its handle).
 
-    A suspension (``@lock(..., preempt="suspend")`` lending the holder's
-    resource to a preemptor) freezes as a pause does, apart from any pause:
-    ``resume()`` lifts the pause only, and the end of the loan the suspension.
-
-    The walk up stops at a cancelled action: cancellation reaches a paused
-    action at once, and its cleanup (the actions it starts then) runs unfrozen.
+    A *spell* is a stretch of time the action spends frozen, from the moment
+    it or an ancestor freezes until it thaws or is cancelled: ``since`` is set
+    during one, and ``total`` adds up those that ended.
     """
-    node: ActionHandle[Any] | None = handle
-    while node is not None:
-        if node._cancel_requested:
+
+    __slots__ = ("by", "paused", "reason", "since", "suspended", "thaw", "total")
+
+    def __init__(self) -> None:
+        self.paused = False
+        """Paused itself (`ActionHandle.pause`), until `ActionHandle.resume`."""
+        self.reason: str | None = None
+        """The reason given to the pause."""
+        self.by: object = None
+        """The action that paused it, or None."""
+        self.suspended: str | None = None
+        """The reason of the suspension lending its resources to a preemptor, if any."""
+        self.since: float | None = None
+        """Loop time when the current spell began, or None if it is not frozen."""
+        self.total = 0.0
+        """Seconds frozen in the spells that ended."""
+        self.thaw: asyncio.Future[None] | None = None
+        """What the action's task waits on while frozen; done when the spell ends."""
+
+    @property
+    def holds(self) -> bool:
+        """Whether this action itself freezes its subtree: paused or suspended."""
+        return self.paused or self.suspended is not None
+
+    def pause(self, reason: str | None, by: object) -> None:
+        """Record a pause (a second one replaces the reason)."""
+        self.paused, self.reason, self.by = True, reason, by
+
+    def unpause(self) -> None:
+        """Forget the pause."""
+        self.paused, self.reason, self.by = False, None, None
+
+    def suspend(self, reason: str) -> None:
+        """Record a suspension (a second one replaces the reason)."""
+        self.suspended = reason
+
+    def unsuspend(self) -> None:
+        """Forget the suspension."""
+        self.suspended = None
+
+    def begin(self, now: float) -> bool:
+        """Start a spell at ``now`` unless one runs; return whether it started."""
+        if self.since is not None:
             return False
-        if node._paused or node._suspended is not None:
-            return True
-        node = node.parent
-    return False
+        self.since = now
+        return True
+
+    def end(self, now: float) -> None:
+        """End the spell at ``now`` (if one runs) and wake the task waiting for the thaw."""
+        if self.since is not None:
+            self.total += now - self.since
+            self.since = None
+        thaw = self.thaw
+        if thaw is not None and not thaw.done():
+            thaw.set_result(None)
+
+    def spent(self, now: float) -> float:
+        """Seconds frozen so far, the current spell included."""
+        return self.total if self.since is None else self.total + now - self.since
+
+    def waiter(self, loop: asyncio.AbstractEventLoop) -> asyncio.Future[None]:
+        """The thaw future of the current spell (made once for it)."""
+        thaw = self.thaw
+        if thaw is None or thaw.done():
+            thaw = self.thaw = loop.create_future()
+        return thaw
 
 
-def frozen_time(handle: ActionHandle[Any]) -> float:
-    """Seconds (loop time) ``handle`` has spent frozen so far, the current spell included."""
-    since = handle._frozen_since
-    if since is None:
-        return handle._frozen_total
-    return handle._frozen_total + handle._loop.time() - since
+class Frozen(Protocol):
+    """What the trampoline and the hooks read of an action (`ActionHandle` fits)."""
+
+    _freeze: Freeze | None
+    _loop: asyncio.AbstractEventLoop
+    _hooks: Hooks | None
+
+    @property
+    def id(self) -> int:
+        """The action's id, for log messages."""
+
+    @property
+    def name(self) -> str:
+        """The action's name, for log messages."""
 
 
-def subtree(handle: ActionHandle[Any]) -> Iterator[ActionHandle[Any]]:
-    """``handle`` and its descendants as they are now, parents before children."""
-    stack = [handle]
-    while stack:
-        node = stack.pop()
-        yield node
-        stack.extend(reversed(node._children))
+Hooks = tuple["Callable[[Any], object] | None", "Callable[[Any], object] | None"]
+"""An action's pause and resume hooks, each called with the robot (or None)."""
+
+
+_NOTHING = object()
+_YIELDED = object()
+"""`Stepped._thawing` when the body's first yield is still to be passed to the task."""
 
 
 class Stepped(Generic[T]):
     """The body ``coro``, awaited through this: each resumption held while ``handle`` is frozen.
 
     An iterator that the action's task awaits in the body's place: it forwards
-    each ``send``/``throw`` to the body, unless the action is frozen. Then it
+    each ``send``/``throw`` to the body, unless the action is frozen. Given
+    ``yielded``, the body has run its first step already (the action's task
+    runs it unwrapped, as most bodies end there) and that is what it awaits. Then it
     keeps the value meant for the body and hands the task the action's thaw
     future; when that completes, the kept value goes on to the body. An
     exception thrown in (cancellation) goes on to the body at once, frozen or
     not. A class, not a generator: no frame of its own in the body's
-    tracebacks, and it compiles to a native iterator.
+    tracebacks.
     """
 
-    __slots__ = ("_coro", "_executive", "_handle", "_held", "_thawing")
+    __slots__ = ("_coro", "_handle", "_held", "_thawing")
 
-    def __init__(self, handle: ActionHandle[Any], coro: Coroutine[Any, Any, T]) -> None:
+    def __init__(
+        self, handle: Frozen, coro: Coroutine[Any, Any, T], yielded: Any = _NOTHING
+    ) -> None:
         self._handle = handle
-        self._executive = handle._executive
         self._coro = coro
-        self._held: Any = None  # the value the body gets when it thaws
-        self._thawing = False  # the task waits for the thaw future
+        if yielded is _NOTHING:
+            self._held: Any = None  # the value the body gets when it thaws
+            self._thawing: object = False  # the task waits for the thaw future
+        else:  # the body was stepped once already: what it yielded goes to the task first
+            self._held = yielded
+            self._thawing = _YIELDED
 
-    def __await__(self) -> Stepped[T]:
-        return self
+    def __await__(self) -> Generator[Any, Any, T]:
+        return self  # an iterator with send and throw, as a generator
 
     def __iter__(self) -> Stepped[T]:
         return self
 
     def __next__(self) -> Any:
-        if self._thawing or (self._executive.paused and frozen(self._handle)):
+        if self._thawing or self._handle._freeze is not None:
             return self.send(None)
         return self._coro.send(None)
 
     def send(self, value: Any) -> Any:
         """Resume the body with ``value``, or hand the task the thaw future while it is frozen."""
-        if self._thawing:  # the thaw future is done: the kept value, once the action thaws
-            value = self._held
+        if self._thawing:
+            if self._thawing is _YIELDED:  # not a resumption: the body's first yield, passed on
+                yielded, self._held, self._thawing = self._held, None, False
+                return yielded
+            value = self._held  # the thaw future is done: the kept value, once it thaws
         handle = self._handle
-        if self._executive.paused and frozen(handle):
+        freeze = handle._freeze
+        if freeze is not None and freeze.since is not None:
             self._held = value
             self._thawing = True
-            thaw = handle._thaw
-            if thaw is None or thaw.done():
-                thaw = handle._thaw = handle._loop.create_future()
+            thaw = freeze.waiter(handle._loop)
             thaw._asyncio_future_blocking = True  # what ``yield from thaw`` would set
             return thaw
         self._thawing = False
@@ -138,81 +213,38 @@ class Stepped(Generic[T]):
         self._coro.close()
 
 
-def freeze(
-    handle: ActionHandle[Any], reason: str | None, by: ActionHandle[Any] | None
-) -> list[ActionHandle[Any]]:
-    """Pause ``handle``; return the actions that froze because of it (deepest first)."""
-    handle._paused = True
-    handle._pause_reason = reason
-    handle._paused_by = by
-    return freeze_subtree(handle)
+class Hook(enum.Enum):
+    """Which of an action's hooks to call (``@action(on_pause=..., on_resume=...)``)."""
+
+    PAUSE = "pause"
+    RESUME = "resume"
 
 
-def freeze_subtree(handle: ActionHandle[Any]) -> list[ActionHandle[Any]]:
-    """Start the frozen clock of ``handle``'s subtree; return what froze now (deepest first)."""
-    now = handle._loop.time()
-    newly = []
-    for node in subtree(handle):
-        if node._frozen_since is None and not node._cancel_requested and node._phase != DONE:
-            node._frozen_since = now
-            newly.append(node)
-    newly.reverse()
-    return newly
-
-
-def thaw(handle: ActionHandle[Any]) -> list[ActionHandle[Any]]:
-    """Resume ``handle`` (counted unpaused already); return what thawed, parents first."""
-    handle._pause_reason = None
-    handle._paused_by = None
-    return thaw_subtree(handle)
-
-
-def thaw_subtree(handle: ActionHandle[Any]) -> list[ActionHandle[Any]]:
-    """Wake what in ``handle``'s subtree is no longer frozen; return it, parents first."""
-    thawed = []
-    for node in subtree(handle):
-        if node._frozen_since is not None and not frozen(node):
-            stop_frozen_clock(node)
-            thawed.append(node)
-    return thawed
-
-
-def stop_frozen_clock(node: ActionHandle[Any]) -> None:
-    """Add the spell that ends now to ``node``'s frozen time, and wake its body."""
-    since = node._frozen_since
-    if since is not None:
-        node._frozen_total += node._loop.time() - since
-        node._frozen_since = None
-    if node._thaw is not None and not node._thaw.done():
-        node._thaw.set_result(None)
-
-
-def run_hooks(nodes: list[ActionHandle[Any]], which: int, what: str) -> None:
-    """Call each node's pause (``which`` 0) or resume (1) hook with its robot; log failures."""
+def run_hooks(nodes: list[Frozen], hook: Hook, robot: object, log: ScopedLogger) -> None:
+    """Call each node's ``hook`` with ``robot``; log what fails (an async hook runs on its own)."""
+    index = 0 if hook is Hook.PAUSE else 1
     for node in nodes:
         hooks = node._hooks
-        hook = None if hooks is None else hooks[which]
-        if hook is None:
+        call = None if hooks is None else hooks[index]
+        if call is None:
             continue
         try:
-            result = hook(node._executive.owner)
+            result = call(robot)
         except Exception:
-            node._executive.log.exception(
-                "%s hook of action %s#%d failed", what, node.name, node.id
-            )
+            log.exception("%s hook of action %s#%d failed", hook.value, node.name, node.id)
             continue
         if inspect.isawaitable(result):
-            _follow(node, what, asyncio.ensure_future(result, loop=node._loop))
+            _follow(node, hook, asyncio.ensure_future(result, loop=node._loop), log)
 
 
-def _follow(node: ActionHandle[Any], what: str, task: asyncio.Future[Any]) -> None:
+def _follow(node: Frozen, hook: Hook, task: asyncio.Future[Any], log: ScopedLogger) -> None:
     """Log the failure of an async hook (it runs on its own; nothing waits for it)."""
 
     def done(fut: asyncio.Future[Any]) -> None:
         if not fut.cancelled() and fut.exception() is not None:
-            node._executive.log.error(
+            log.error(
                 "%s hook of action %s#%d failed",
-                what,
+                hook.value,
                 node.name,
                 node.id,
                 exc_info=fut.exception(),

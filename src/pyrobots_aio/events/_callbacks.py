@@ -15,8 +15,10 @@ from __future__ import annotations
 import asyncio
 import inspect
 from collections import deque
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
+from .._core._grace import Ladder, Stage
 from .._core._waiting import Countdown, wait_shielded
 from ..actions import Action, ActionHandle, BoundAction
 from ..actions._where import location
@@ -312,7 +314,7 @@ class FailureLog:
 
 
 async def settle(runners: Sequence[CallbackRunner], grace: float) -> None:
-    """Wait until every runner has settled, bounded by two graces.
+    """Wait until every runner has settled, bounded by the grace ladder (two graces).
 
     After one grace, tasks still running are cancelled again (a warning names
     where they are); after a second one they are abandoned (an error). If the
@@ -328,22 +330,21 @@ async def settle(runners: Sequence[CallbackRunner], grace: float) -> None:
     countdown = Countdown(loop, len(late))
     for runner in late:
         runner.idle().add_done_callback(countdown.tick)
-    timers = [
-        loop.call_later(grace * n, _overdue, late, stage, grace)
-        for n, stage in ((1, CallbackRunner.escalate), (2, CallbackRunner.abandon))
-    ]
+    ladder: Ladder[Sequence[CallbackRunner]] = Ladder(loop, grace, partial(_overdue, grace))
+    ladder.watch(late)
     try:
         await wait_shielded(countdown.future)
     finally:
-        for timer in timers:
-            timer.cancel()
+        ladder.close()
 
 
-def _overdue(
-    runners: Sequence[CallbackRunner],
-    stage: Callable[[CallbackRunner, float], None],
-    grace: float,
-) -> None:
+def _overdue(grace: float, runners: Sequence[CallbackRunner], stage: Stage) -> bool:
+    """The ladder's step: escalate, then abandon, what each runner still runs."""
     for runner in runners:
-        if not runner.settled:
-            stage(runner, grace)
+        if runner.settled:
+            continue
+        if stage is Stage.ESCALATE:
+            runner.escalate(grace)
+        else:
+            runner.abandon(grace)
+    return True

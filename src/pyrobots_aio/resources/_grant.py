@@ -10,7 +10,7 @@ holder is that owner or one of its ancestors. Each leaf also keeps a
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Generic, Literal, Protocol, TypeAlias, TypeVar
+from typing import TYPE_CHECKING, Generic, Literal, Protocol, TypeAlias, TypeVar
 
 from .._exceptions import LockUsageError
 from ._queue import WaitQueue
@@ -34,12 +34,13 @@ Options: TypeAlias = tuple[bool, int, Preempt]
 
 
 class Owner(Protocol):
-    """What the manager needs of whoever takes resources (`ActionHandle` fits)."""
+    """What the manager needs of whoever takes resources (`ActionHandle` fits).
 
-    held: tuple[str, ...]
-    """Names of the resources it holds (the manager keeps this up to date)."""
-    awaiting: tuple[str, ...]
-    """Names of the resources it waits for (the manager keeps this up to date)."""
+    A public protocol: a stand-in for an action (a test double, another
+    executive) implements these and nothing private. The manager never writes
+    an owner's state; it asks, and answers what an owner holds and awaits
+    (`ResourceManager.held_by`, `ResourceManager.awaited_by`).
+    """
 
     @property
     def id(self) -> int:
@@ -60,10 +61,10 @@ class Owner(Protocol):
     def cancel(self, reason: str | None = None) -> bool:
         """Request its cancellation (preemption); return False if it is done."""
 
-    def _suspend(self, reason: str, by: Any) -> None:
+    def suspend(self, reason: str, by: Owner) -> None:
         """Freeze it and its subtree, apart from any pause, while ``by`` borrows its resource."""
 
-    def _unsuspend(self) -> None:
+    def unsuspend(self) -> None:
         """End the suspension: it thaws unless it is paused as well."""
 
     def done(self) -> bool:

@@ -17,7 +17,7 @@ Semantics where the design leaves a choice:
   frozen action) and its cleanup runs, without the lent leaf: the loan is
   forfeited, and when the borrower lets go the leaf goes to the waiting line
   as if released (its cleanup asks again like anyone else). Its grant still
-  counts as held (``owner.held``) until it ends.
+  counts as held (`ResourceManager.held_by`) until it ends.
 - A holder already paused is suspended as well, apart from its pause: at the
   end of the loan it stays paused until ``resume()``; ``resume()`` during the
   loan lifts the pause only, never the suspension.

@@ -71,6 +71,9 @@ class _Record(Generic[OwnerT]):
         self.waiting: list[Grant[OwnerT]] = []
 
 
+_NOTHING: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())
+
+
 def _names(grants: list[Grant[OwnerT]]) -> tuple[str, ...]:
     """The names of the resources of ``grants``, each once, in order."""
     if len(grants) == 1:
@@ -267,7 +270,6 @@ class ResourceManager(Generic[OwnerT]):
         record = self._owners.get(grant.owner)
         if record is not None:
             record.grants.remove(grant)
-            self._sync(grant.owner, record)
         if self._instruments:
             self._instruments.emit(ResourceReleased(*self._held(grant)))
         if lent:
@@ -314,6 +316,27 @@ class ResourceManager(Generic[OwnerT]):
     def held(self) -> dict[Resource, OwnerT]:
         """Every plain resource held now, and its (innermost) holder."""
         return {s.resource: s.holds[-1].owner for s in self._leaves.values() if s.holds}
+
+    def held_by(self, owner: OwnerT) -> tuple[str, ...]:
+        """The names of the resources ``owner`` holds, each once, in the order taken.
+
+        A resource lent to a ``preempt="suspend"`` request still counts as held
+        by its lender, until the lender ends.
+        """
+        record = self._owners.get(owner)
+        return () if record is None else _names(record.grants)
+
+    def awaited_by(self, owner: OwnerT) -> tuple[str, ...]:
+        """The names of the resources ``owner`` waits for, each once, in the order asked."""
+        record = self._owners.get(owner)
+        return () if record is None or not record.waiting else _names(record.waiting)
+
+    def holdings(self, owner: OwnerT) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """`held_by` and `awaited_by` of ``owner`` at once (``robot.running()`` asks for both)."""
+        record = self._owners.get(owner)
+        if record is None:
+            return _NOTHING
+        return _names(record.grants), _names(record.waiting) if record.waiting else ()
 
     def __repr__(self) -> str:
         parts = [self._describe(s) for s in self._leaves.values() if s.holds or s.queue]
@@ -378,7 +401,6 @@ class ResourceManager(Generic[OwnerT]):
             leaf.queue.add(grant)
             leaf.compounds += compound
         self._count_below(owner, 1)
-        self._sync(owner, record)
         if self._instruments:
             self._instruments.emit(ResourceWaiting(*self._held(grant)))
         future = grant._future = asyncio.get_running_loop().create_future()
@@ -405,7 +427,6 @@ class ResourceManager(Generic[OwnerT]):
         record = self._owners.get(grant.owner)
         if record is not None:
             record.waiting.remove(grant)
-            self._sync(grant.owner, record)
         if self._instruments:
             self._instruments.emit(ResourceReleased(*self._held(grant), withdrawn=True))
         self._flush(grant.leaves)
@@ -434,7 +455,6 @@ class ResourceManager(Generic[OwnerT]):
             if grant._future is not None and not grant._future.done():
                 grant._future.set_result(None)
         record.grants.append(grant)
-        self._sync(owner, record)
         if self._instruments:
             self._instruments.emit(ResourceAcquired(*self._held(grant)))
         self._flush(grant.leaves)
@@ -472,8 +492,6 @@ class ResourceManager(Generic[OwnerT]):
         for grant in list(record.grants):
             _log.warning("%s is done but still held %s; released", who(owner), list(grant.names))
             self.release(grant)
-        owner.held = ()
-        owner.awaiting = ()
 
     # -- arbitration ------------------------------------------------------
 
@@ -621,14 +639,14 @@ class ResourceManager(Generic[OwnerT]):
                     self._instruments.emit(lent)
             if lender not in suspended:
                 suspended.add(lender)
-                lender._suspend(reason, owner)
+                lender.suspend(reason, owner)
         self._grant(grant)
         return True
 
     def _unhold(self, leaf: Leaf[OwnerT], grant: Grant[OwnerT]) -> None:
         lender = self._loans.unhold(leaf, grant)
         if lender is not None:
-            lender._unsuspend()
+            lender.unsuspend()
 
     def _give_back(self, leaves: tuple[Leaf[OwnerT], ...]) -> None:
         """Give back the loans on ``leaves`` whose borrowers let go; resume their lenders."""
@@ -641,7 +659,7 @@ class ResourceManager(Generic[OwnerT]):
                         held = self._held(hold, leaf.resource.name)
                         self._instruments.emit(ResourceAcquired(*held, given_back=True))
                 if lender is not None:
-                    lender._unsuspend()
+                    lender.unsuspend()
 
     def _skip(self, grant: Grant[OwnerT], why: _rules.Obstacle[OwnerT] | None = None) -> NoReturn:
         resource, holder, ahead = why if why is not None else _rules.obstacle(grant, self._below)
@@ -655,11 +673,6 @@ class ResourceManager(Generic[OwnerT]):
         raise ActionSkipped(resource, holder, queued=queued, queued_priority=priority)
 
     # -- bookkeeping ------------------------------------------------------
-
-    @staticmethod
-    def _sync(owner: OwnerT, record: _Record[OwnerT]) -> None:
-        owner.held = _names(record.grants)
-        owner.awaiting = _names(record.waiting)
 
     def _held(
         self, grant: Grant[OwnerT], lent: str | None = None

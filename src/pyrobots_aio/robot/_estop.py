@@ -130,11 +130,11 @@ class EmergencyStop:
                 uncapped=True,
             )  # fmt: skip
         except Exception:
-            _cancel(executive, holders, f"emergency stop: {reason}", None)
+            _cancel(holders, f"emergency stop: {reason}", None)
             raise
         finally:
             current_action.reset(token)
-        _cancel(executive, holders, f"emergency stop: {reason}", handle)
+        _cancel(holders, f"emergency stop: {reason}", handle)
         return handle
 
     def add_emergency_stop_callback(self, callback: StopCallback) -> None:
@@ -192,15 +192,9 @@ class EmergencyStop:
             raise EmergencyStopError(what, self._estop_reason)
 
 
-def _cancel(
-    executive: Executive,
-    holders: list[ActionHandle[Any]],
-    reason: str,
-    by: ActionHandle[Any] | None,
-) -> None:
+def _cancel(holders: list[ActionHandle[Any]], reason: str, by: ActionHandle[Any] | None) -> None:
     for holder in holders:
-        if not holder.done():
-            executive.cancel_tree(holder, reason, by)
+        holder._cancel_subtree(reason, by)  # on behalf of the stop: by it, not by the caller
 
 
 async def _wait_until_done(executive: Executive, holders: list[ActionHandle[Any]]) -> None:

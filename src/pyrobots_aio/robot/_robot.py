@@ -124,14 +124,15 @@ class Robot(StateMethods, EmergencyStop):
         for instrument in instruments:
             self.instruments.add(instrument)
         self._log_scope = LogScope()
+        self.resources: ResourceManager[ActionHandle[Any]] = ResourceManager(self.instruments)
         self._executive = Executive(
             self,
+            resources=self.resources,
             max_actions=max_actions,
             cancel_grace=cancel_grace,
             instruments=self.instruments,
             log=self._log_scope,
         )
-        self.resources: ResourceManager[ActionHandle[Any]] = ResourceManager(self.instruments)
         self._state = StateStore()
         self.events = EventManager(self, self._state, self._executive, self.instruments)
         self.poses = PoseManager()
