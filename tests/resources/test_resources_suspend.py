@@ -12,6 +12,7 @@ import pytest
 
 from pyrobots_aio import (
     ActionCancelled,
+    ActionHandle,
     ActionSkipped,
     ActionState,
     EventKind,
@@ -141,15 +142,23 @@ async def test_the_holder_gets_it_back_before_anyone_waiting() -> None:
     ]
 
 
+async def nested_suspensions(
+    robot: Robot, log: Log
+) -> tuple[ActionHandle[str], ActionHandle[str], ActionHandle[None]]:
+    """A drive suspended by a reflex at 0.5 s, itself suspended by a bigger one at 1 s."""
+    walk = drive(robot, log, ticks=2)
+    await robot.sleep(0.5)
+    small = reflex(robot, log, 2)
+    await robot.sleep(0.5)
+    big = big_reflex(robot, log)
+    await robot.sleep(0)
+    return walk, small, big
+
+
 async def test_nested_suspensions_give_back_newest_first() -> None:
     log = Log()
     async with Robot() as robot:
-        walk = drive(robot, log, ticks=2)
-        await robot.sleep(0.5)
-        small = reflex(robot, log, 2)
-        await robot.sleep(0.5)
-        big = big_reflex(robot, log)
-        await robot.sleep(0)
+        walk, small, big = await nested_suspensions(robot, log)
         assert walk.paused
         assert small.paused
         assert robot.resources.lenders(WHEELS) == [walk, small]
@@ -166,6 +175,30 @@ async def test_nested_suspensions_give_back_newest_first() -> None:
         "3.5 reflex ends (holds)",  # 2 s of its own, 1 s frozen
         "4 drive 1 (holds)",
         "5 drive 2 (holds)",
+    ]
+
+
+async def test_a_borrower_cancelled_while_it_lends_onward_keeps_its_lender_suspended() -> None:
+    log = Log()
+    async with Robot() as robot:
+        walk, small, big = await nested_suspensions(robot, log)
+        small.cancel("give up")
+        assert await small.wait_done() is Outcome.CANCELLED
+        # the wheels are still lent onward: walk gets them back when big lets go, not now
+        assert robot.resources.held() == {WHEELS: big}
+        assert robot.resources.lenders(WHEELS) == [walk]
+        assert walk.paused
+        await big
+        assert robot.resources.held() == {WHEELS: walk}
+        assert robot.resources.lenders(WHEELS) == []
+        assert not walk.paused
+        assert await walk == "arrived"
+    assert log == [
+        "0.5 reflex starts (holds)",
+        "1 big reflex starts (holds)",
+        "2 big reflex ends (holds)",
+        "2.5 drive 1 (holds)",  # 0.5 s of its first tick left when suspended
+        "3.5 drive 2 (holds)",
     ]
 
 

@@ -220,4 +220,12 @@ class Leaf(Generic[OwnerT]):
         self.compounds = 0
         """How many of the requests in `queue` ask for other leaves too."""
         self.lent: list[Loan[OwnerT]] = []
-        """Loans outstanding, oldest first; only the newest can be given back."""
+        """Loans outstanding, oldest first; only the newest can be given back.
+
+        A loan emptied by its (cancelled) lender stays until its borrower
+        lets go, so that the loans under it wait for that too.
+        """
+
+    def lenders(self) -> list[OwnerT]:
+        """The suspended lenders, oldest first (not those whose loans were emptied)."""
+        return [loan.lender for loan in self.lent if loan.holds]

@@ -17,7 +17,11 @@ Semantics where the design leaves a choice:
   frozen action) and its cleanup runs, without the lent leaf: the loan is
   forfeited, and when the borrower lets go the leaf goes to the waiting line
   as if released (its cleanup asks again like anyone else). Its grant still
-  counts as held (`ResourceManager.held_by`) until it ends.
+  counts as held (`ResourceManager.held_by`) until it ends. A lender that
+  was itself a borrower (nested) and releases all it was lent ends its
+  suspension, but its emptied loan stays on the stack until its borrower
+  lets go: the loans under it go back only then, never while the leaf is
+  lent onward.
 - A holder already paused is suspended as well, apart from its pause: at the
   end of the loan it stays paused until ``resume()``; ``resume()`` during the
   loan lifts the pause only, never the suspension.
@@ -108,10 +112,10 @@ class Loans(Generic[OwnerT]):
         for loan in leaf.lent:
             if grant in loan.holds:
                 loan.holds.remove(grant)
-                if not loan.holds:  # everything lent was released: nothing to give back
-                    leaf.lent.remove(loan)
-                    return self._ended(loan)
-                return None
+                # Everything lent was released: nothing to give back, but the
+                # loan stays on the stack while its borrower holds the leaf,
+                # or the loans under it would go back while it is lent onward.
+                return None if loan.holds else self._ended(loan)
         return None  # a forfeited loan's hold
 
     def give_back(self, leaf: Leaf[OwnerT]) -> list[tuple[Loan[OwnerT], bool, OwnerT | None]]:
@@ -129,6 +133,8 @@ class Loans(Generic[OwnerT]):
             if any(descends(hold.owner, borrower) for hold in holds):
                 break
             leaf.lent.pop()
+            if not loan.holds:  # emptied and ended by `unhold`
+                continue
             lender = loan.lender
             restored = not (lender.done() or lender.cancel_requested)
             if restored:

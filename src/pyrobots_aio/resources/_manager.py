@@ -310,7 +310,7 @@ class ResourceManager(Generic[OwnerT]):
         for leaf in check_resource(resource, "the resource to look up").leaves:
             state = self._leaves.get(leaf.name)
             if state is not None:
-                found.update(dict.fromkeys(loan.lender for loan in state.lent))
+                found.update(dict.fromkeys(state.lenders()))
         return list(found)
 
     def held(self) -> dict[Resource, OwnerT]:
@@ -345,8 +345,9 @@ class ResourceManager(Generic[OwnerT]):
     @staticmethod
     def _describe(state: Leaf[OwnerT]) -> str:
         what = f"held by {holder(state.holds[-1].owner)}" if state.holds else "free"
-        if state.lent:
-            what += f" (lent by {', '.join(who(loan.lender) for loan in state.lent)})"
+        lenders = [who(lender) for lender in state.lenders()]
+        if lenders:
+            what += f" (lent by {', '.join(lenders)})"
         queued = [who(grant.owner) for grant in state.queue]
         if queued:
             more = f" and {len(queued) - 5} more" if len(queued) > 5 else ""
