@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import math
+import subprocess
+import sys
 
 import pytest
 
@@ -37,3 +39,39 @@ def test_run_scaled_runs_main_with_its_arguments_on_the_loop_of_its_rate(rate: f
         return a + b, isinstance(asyncio.get_running_loop(), ScaledTimeLoop)
 
     assert run_scaled(main, 2, 3, rate=rate) == (5, rate != 1)
+
+
+CLOSE_UNDER_A_SIGNAL = """
+import asyncio, signal, sys
+from pyrobots_aio.loops import SignalSafeLoop, scaled_loop
+
+kinds = {"stock": asyncio.SelectorEventLoop, "safe": SignalSafeLoop}
+kinds["scaled"] = lambda: scaled_loop(1)
+loop = kinds[sys.argv[1]]()
+loop.add_signal_handler(signal.SIGUSR1, lambda: None)
+close_pipe = loop._close_self_pipe
+
+def close_then_signal():  # the window: the self-pipe is closed, the handlers not yet removed
+    close_pipe()
+    signal.raise_signal(signal.SIGUSR1)
+
+loop._close_self_pipe = close_then_signal
+loop.close()
+print("closed")
+"""
+
+
+@pytest.mark.parametrize("kind", ["stock", "safe", "scaled"])
+def test_a_signal_while_the_loop_closes_writes_to_no_closed_file(kind: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", CLOSE_UNDER_A_SIGNAL, kind],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert (done.returncode, done.stdout) == (0, "closed\n"), done.stderr
+    if kind == "stock":  # asyncio's own order: the signal is written to the closed pipe
+        assert "Bad file descriptor" in done.stderr
+    else:
+        assert done.stderr == ""

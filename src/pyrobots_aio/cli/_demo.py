@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
+from pyrobots_aio.loops import run_scaled
 from pyrobots_aio.recording import (
     JsonlRecorder,
     McapRecorder,
@@ -303,7 +304,7 @@ def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> in
     stopping = stop_on_signals()
     try:
         main = _walk(options, recorder, show, stopping)
-        report = asyncio.run(main()) if options.realtime else run(main)
+        report = run_scaled(main) if options.realtime else run(main)
     except asyncio.CancelledError:
         if show.pipe_closed:
             raise BrokenPipeError(errno.EPIPE, "the output pipe was closed") from None

@@ -8,11 +8,13 @@
 - **Scaled time**: `ScaledTimeLoop` runs ``rate`` times faster than the wall
   clock. `run_scaled(main, *args, rate=R)` runs a program at the pace of a
   ``pyrobots-aio sim-node --rate R``.
+- Each closes safely under signals: `SignalSafeLoop` (rate 1 is one).
 
 Layer: right above ``_core``; ``sim``, ``ros2``, ``cli`` and ``testing`` all
 use it, and it imports none of them.
 """
 
+from ._closing import SignalSafeLoop as SignalSafeLoop
 from ._scaled import ScaledTimeLoop as ScaledTimeLoop
 from ._scaled import run_scaled as run_scaled
 from ._scaled import scaled_loop as scaled_loop
@@ -24,6 +26,7 @@ from ._virtual import run_lockstep as run_lockstep
 
 __all__ = [
     "ScaledTimeLoop",
+    "SignalSafeLoop",
     "VirtualTimeLoop",
     "VirtualTimePolicy",
     "is_virtual",

@@ -12,6 +12,8 @@ import selectors
 import time
 from typing import TYPE_CHECKING, TypeVar, TypeVarTuple
 
+from ._closing import SignalSafeLoop
+
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine
 
@@ -32,7 +34,7 @@ class _ScaledSelector(selectors.DefaultSelector):
         return super().select(None if timeout is None else timeout / self._rate)
 
 
-class ScaledTimeLoop(asyncio.SelectorEventLoop):
+class ScaledTimeLoop(SignalSafeLoop):
     """An event loop whose clock runs ``rate`` times faster than the wall clock, from 0.
 
     Timers, sleeps and timeouts all follow it, so a real-time `SimRobot` on
@@ -53,7 +55,8 @@ def scaled_loop(rate: float) -> asyncio.AbstractEventLoop:
     """A new event loop whose clock runs ``rate`` times faster than the wall clock, from 0.
 
     Its timers, sleeps and timeouts all follow it (``robot.sleep(1)`` lasts
-    ``1 / rate`` wall-clock seconds); rate 1 is an ordinary loop.
+    ``1 / rate`` wall-clock seconds); rate 1 is an ordinary loop. Each lets go of
+    the signal wake-up before it closes (`SignalSafeLoop`).
 
     Raises:
         ValueError: ``rate`` is not a positive, finite number.
@@ -62,7 +65,7 @@ def scaled_loop(rate: float) -> asyncio.AbstractEventLoop:
         msg = f"rate must be a positive number (simulated seconds per second), got {rate!r}"
         raise ValueError(msg)
     if rate == 1:
-        return asyncio.new_event_loop()
+        return SignalSafeLoop()
     return ScaledTimeLoop(float(rate))
 
 

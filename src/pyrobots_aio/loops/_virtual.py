@@ -46,6 +46,7 @@ from typing import TYPE_CHECKING, Any, TypeVar, TypeVarTuple
 
 from .._core._numbers import finite
 from .._exceptions import EventLoopError
+from ._closing import SignalSafeLoop
 
 if TYPE_CHECKING:
     from collections import deque
@@ -104,7 +105,7 @@ class _IdleSkippingSelector(selectors.BaseSelector):
         self._inner.close()
 
 
-class VirtualTimeLoop(asyncio.SelectorEventLoop):
+class VirtualTimeLoop(SignalSafeLoop):
     """An asyncio selector event loop whose clock is virtual.
 
     ``time()`` starts at 0.0 and only moves when the loop would otherwise wait:
