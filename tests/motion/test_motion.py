@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import math
 from typing import TYPE_CHECKING, Any
@@ -12,6 +13,9 @@ from pyrobots_aio import ActionInterrupted, DriveBase, Outcome
 from pyrobots_aio.motion import WHEELS
 from pyrobots_aio.sim.random_walk import random_walk
 from pyrobots_aio.testing import EventLog
+
+HANG_GUARD = 60.0
+"""Seconds of the robot's clock a wait may take at most (a hung test fails)."""
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -142,15 +146,24 @@ async def test_cancelling_any_motion_stops_the_wheels_and_releases_them(
         assert handle.outcome is Outcome.CANCELLED
 
 
+async def _reaches(robot: DriveBase, v: float, within: float, tolerance: float) -> None:
+    """Wait until ``robot.state.v`` is ``v``: ``within`` seconds in virtual time; over ROS 2,
+    where the base is another process that a loaded machine may hold up, until a hang guard."""
+    await robot.sleep(within)
+    async with asyncio.timeout(HANG_GUARD):
+        while abs(robot.state.v - v) > tolerance:
+            await robot.sleep(robot.control_period)
+
+
 async def test_drive_and_stop_command_the_wheels_without_locking_them(base: Base) -> None:
     async with base.make() as robot:
         robot.drive(0.1, 0.0)
-        await robot.sleep(1.0)
+        await _reaches(robot, 0.1, 1.0, 0.01)
         assert robot.state.v == pytest.approx(0.1, abs=0.01)
         assert not robot.state.docked
         assert robot.resources.owner(WHEELS) is None
         robot.stop()
-        await robot.sleep(0.5)
+        await _reaches(robot, 0.0, 0.5, 0.005)
         assert robot.state.v == pytest.approx(0.0, abs=0.005)
 
 
