@@ -261,13 +261,14 @@ async def main():
     loop = asyncio.get_running_loop()
     done = asyncio.Event()
     loop.add_reader(sys.stdin.fileno(), done.set)
-    watch = BlockWatch(loop, 0.1, LogScope().logger("pyrobots_aio.watchdog"), Instruments())
+    # 0.3 s: still half the stop, and more than a loaded virtual machine's stolen time.
+    watch = BlockWatch(loop, 0.3, LogScope().logger("pyrobots_aio.watchdog"), Instruments())
     watch.start()
     print("busy", flush=True)
     while not done.is_set():
-        # Busy callbacks of 30 ms of CPU time each, never a block: stopped in the middle of
+        # Busy callbacks of 5 ms of CPU time each, never a block: stopped in the middle of
         # one, the loop thread finishes it when the process goes on, then turns.
-        end = time.thread_time() + 0.03
+        end = time.thread_time() + 0.005
         while time.thread_time() < end:
             pass
         await asyncio.sleep(0)
