@@ -311,3 +311,13 @@ async def test_a_callback_hands_over_actions_and_the_stop_waits_for_them(
         await robot.sleep(1)
         await robot.emergency_stop("again")
         assert not handing[0].done()
+
+
+async def test_a_callback_that_is_not_callable_is_refused() -> None:
+    robot = Robot()
+    with pytest.raises(TypeError) as caught:
+        robot.add_emergency_stop_callback("stop everything")  # type: ignore[arg-type]
+    assert str(caught.value) == (
+        "an emergency stop callback must be callable as callback(reason), got 'stop everything'; "
+        "pass a function returning the actions to stop"
+    )

@@ -148,7 +148,17 @@ class EmergencyStop:
         their subtrees; the ``emergency_stop`` action waits for them too). It
         must not await; an error in it is logged and the stop goes on. Until
         `remove_emergency_stop_callback`; adding it twice adds it once.
+
+        Raises:
+            TypeError: ``callback`` is not callable.
         """
+        given: object = callback  # checked at run time: the annotation promises nothing
+        if not callable(given):
+            msg = (
+                f"an emergency stop callback must be callable as callback(reason), got "
+                f"{callback!r}; pass a function returning the actions to stop"
+            )
+            raise TypeError(msg)
         if self._estop_callbacks is None:
             self._estop_callbacks = {}
         self._estop_callbacks[callback] = None
