@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterator
+    from collections.abc import Callable, Iterator, Mapping
     from types import ModuleType
 
 SKIP_REASON = (
@@ -158,9 +158,13 @@ SIM_NODE = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]
 
 
 @contextlib.contextmanager
-def sim_node_process(*args: str) -> Iterator[subprocess.Popen[bytes]]:
+def sim_node_process(
+    *args: str, env: Mapping[str, str] | None = None
+) -> Iterator[subprocess.Popen[bytes]]:
     """A sim-node process (``args``: its options), up and ready; killed if still running after."""
-    process = subprocess.Popen([*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(
+        [*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
+    )
     try:
         assert process.stdout is not None
         ready = process.stdout.readline()

@@ -71,10 +71,12 @@ def test_a_second_profile_sits_beside_the_standard_one_and_names_the_topics() ->
         command=dataclasses.replace(STANDARD.command, name="base/cmd_vel"),
     )
     assert isinstance(renamed, Profile)
-    robot = Ros2Robot(profile=renamed, sensors=[])
+    robot = Ros2Robot(profile=renamed, sensors=[], tf=False)
     assert robot.ros.topics == {"cmd_vel": "base/cmd_vel", "odom": "odom"}
-    assert Ros2Robot(profile="standard").ros.topics == {
+    assert Ros2Robot(profile="standard", tf=True).ros.topics == {
         "cmd_vel": "cmd_vel",
         "odom": "odom",
         **{s.key: s.key for s in SENSORS},
+        "tf": "tf",
+        "tf_static": "tf_static",
     }

@@ -21,6 +21,8 @@ topic                         type                          QoS
 ``cliff_<position>`` (4)      std_msgs/msg/Bool             default
 ``docked``                    std_msgs/msg/Bool             default
 ``battery_state``             sensor_msgs/msg/BatteryState  default
+``tf``                        tf2_msgs/msg/TFMessage        reliable, 100
+``tf_static``                 tf2_msgs/msg/TFMessage        reliable, transient local
 ``/clock`` (``--rate`` ≠ 1)   rosgraph_msgs/msg/Clock       default
 ``/diagnostics``              diagnostic_msgs/msg/...Array  default, 1 Hz
 ============================  ============================  =========================
@@ -35,6 +37,12 @@ topic                         type                          QoS
   nothing is in range, as REP 117 asks; frame ``ir_<position>``).
 - Bumper and cliff sensors are ``std_msgs/Bool``: True while the bumper is
   pressed, True while a cliff sensor sees no floor. ``docked`` is True on the dock.
+- ``tf``: ``odom -> base_link`` each control tick, the odometry's pose and
+  stamp; ``tf_static``: ``base_link -> <sensor>`` once (latched) for each
+  frame on the robot's body (``ir_<position>``, ``cliff_<position>``,
+  ``bumper_left``/``_right``, ``imu``, ``charge_contacts``). Relative names:
+  ``/tf`` at the root namespace, ``<namespace>/tf`` under one (as a namespaced
+  Create 3 has them). Needs ``tf2_msgs`` (``pyrobots-aio ros2 interfaces build``).
 - Stamps: the system clock in real time; the simulation's clock (which
   ``/clock`` carries, from 0) when ``--rate`` is not 1.
 """
@@ -43,6 +51,8 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
+import logging
 import math
 import signal
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
@@ -50,13 +60,20 @@ from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 from pyrobots_aio.loops import run_scaled
 from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry
 
-if TYPE_CHECKING:
-    from collections.abc import Mapping
+from ._bursts import Refusals
+from ._citizen import RosoutHandler, declare_options, uses_sim_time
 
-    from pyrobots_aio.ros2 import Profile, Ros2Node, Ros2Publisher, Topic
+if TYPE_CHECKING:
+    from collections.abc import AsyncIterator, Mapping
+
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from pyrobots_aio.ros2 import Profile, Ros2Node, Ros2Publisher, TfBroadcaster, Topic
     from pyrobots_aio.sim import SimRobot
 
 V = TypeVar("V")
+_log = logging.getLogger("pyrobots_aio.cli")
 
 
 def positive(text: str) -> float:
@@ -114,6 +131,14 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="the ROS 2 topics, types and conversions, as Ros2Robot(profile=...) takes them "
         "(default: standard)",
     )
+    node.add_argument(
+        "--ros-args",
+        nargs=argparse.REMAINDER,
+        default=[],
+        metavar="ARG",
+        help="ROS arguments, as every ROS 2 node takes them, to the end of the line: "
+        "-r from:=to (remapping), -p use_sim_time:=true, --log-level debug ...",
+    )
     node.set_defaults(command=run_sim_node)
 
 
@@ -125,6 +150,7 @@ class SimNode:
         ros2: Its node.
         profile: The topics, types and conversions (those `Ros2Robot` reads).
         sim_clock: Stamp with the simulation's clock and publish ``/clock``.
+        clock_origin: The robot's time that is 0 on ``/clock``.
         cmd_timeout: Seconds a command holds before the wheels stop.
     """
 
@@ -135,6 +161,7 @@ class SimNode:
         *,
         profile: Profile,
         sim_clock: bool,
+        clock_origin: float = 0.0,
         cmd_timeout: float,
     ):
         from builtin_interfaces.msg import Time
@@ -145,15 +172,19 @@ class SimNode:
         self._cmd_timeout = cmd_timeout
         self._stop_timer: asyncio.TimerHandle | None = None
         odometry, command = profile.odometry, profile.command
+        self._refused = Refusals(ros2.resolve(command.name))
         self._odom = self._publisher(odometry)
         self._sensors = [self._publisher(t) for t in profile.sensors(robot.sensors)]
         self._status = [self._publisher(t) for t in profile.status]
         self._clock = ros2.publisher("/clock", Clock) if sim_clock else None
-        self._sim_clock = sim_clock
+        self._sim_clock, self._clock_origin = sim_clock, clock_origin
         self._command = command.message_class()
         self._cmd = ros2.subscribe(
             command.name, self._command, callback=self._on_command, qos=command.qos
         )
+        self._tf = _tf_broadcaster(ros2)
+        if self._tf is not None:
+            self._tf.send_static(_sensor_frames(robot), self._stamp())
         self._state = robot.state.subscribe(self._publish, keys=robot.world.state_keys)
         self.topics = sorted(p.topic for _, _, p in (self._odom, *self._sensors))
 
@@ -164,11 +195,17 @@ class SimNode:
     def close(self) -> None:
         """Stop publishing and listening (the robot's shutdown closes the ROS side)."""
         self._state.close()
+        self._refused.close()
         if self._stop_timer is not None:
             self._stop_timer.cancel()
 
     def _on_command(self, message: Any) -> None:
-        self.robot.drive(*self.profile.command.decode(message))
+        v, w = self.profile.command.decode(message)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            self.robot.stop()
+            self._refused.refuse(f"refused a command that is not finite ({v!r}, {w!r}): stopped")
+            return
+        self.robot.drive(v, w)
         if self._stop_timer is not None:
             self._stop_timer.cancel()
         self._stop_timer = asyncio.get_running_loop().call_later(self._cmd_timeout, self.robot.stop)
@@ -176,7 +213,7 @@ class SimNode:
     def _stamp(self) -> Any:
         if not self._sim_clock:
             return self.ros2.node.get_clock().now().to_msg()
-        now = self.robot.time()
+        now = self.robot.time() - self._clock_origin
         whole = math.floor(now)
         return self._time(sec=whole, nanosec=min(int((now - whole) * 1e9), 999_999_999))
 
@@ -187,8 +224,33 @@ class SimNode:
         odometry, odometry_type, odom = self._odom
         reading = Odometry(self.robot.world.odom_pose(), state["v"], state["w"])
         odom.publish(odometry.encode(odometry_type, reading, stamp))
+        if self._tf is not None:
+            self._tf.send_odometry(reading.pose, stamp)
         for topic, cls, publisher in (*self._sensors, *self._status):
             publisher.publish(topic.encode(cls, state, stamp))
+
+
+def _tf_broadcaster(ros2: Ros2Node) -> TfBroadcaster | None:
+    """The tf broadcaster, or None (said once) when tf2_msgs is not built."""
+    from pyrobots_aio.ros2 import TfBroadcaster, tf_available
+
+    if tf_available():
+        return TfBroadcaster(ros2)
+    _log.warning(
+        "sim-node publishes no tf: tf2_msgs cannot be imported "
+        "(build it with: pyrobots-aio ros2 interfaces build tf2_msgs)"
+    )
+    return None
+
+
+def _sensor_frames(robot: SimRobot) -> list[tuple[str, str, NDArray[np.float64]]]:
+    """``base_link -> frame`` for each frame on the robot's body (its sensors), as it stands."""
+    world = {"odom", "base_link", "dock"}
+    return [
+        ("base_link", frame, robot.poses.inframe(frame, "base_link").matrix())
+        for frame in robot.world.frame_names
+        if frame not in world
+    ]
 
 
 async def _serve(options: argparse.Namespace, out: TextIO) -> None:
@@ -197,12 +259,14 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
 
     profile = profile_named(options.profile)
     robot = SimRobot(seed=options.seed, realtime=True, control_rate=options.control_rate)
-    sim_clock = options.rate != 1.0
+    faster = options.rate != 1.0
     ros2 = attach_ros2(
         robot,
         options.name,
         namespace=options.namespace,
-        use_sim_time=sim_clock,
+        use_sim_time=True if faster else None,  # at real time, as --ros-args say
+        ros_args=options.ros_args,
+        standalone=True,
         health_keys=("v", "w", "bumper", "docked"),
     )
     loop = asyncio.get_running_loop()
@@ -211,17 +275,21 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
     for number in signals:
         loop.add_signal_handler(number, stop.set)
     try:
-        async with robot:
+        async with robot, _rosout(ros2):
+            name = ros2.node.get_fully_qualified_name()  # as --ros-args may have remapped it
+            declare_options(ros2.node, options)
             node = SimNode(
                 robot,
                 ros2,
                 profile=profile,
-                sim_clock=sim_clock,
+                sim_clock=faster or uses_sim_time(ros2.node),
+                # A faster loop's clock starts at 0; the real-time one's is the machine's.
+                clock_origin=0.0 if faster else robot.time(),
                 cmd_timeout=options.cmd_timeout,
             )
             print(
-                f"sim-node {ros2.full_name} ready (domain {ros2.domain_id}, x{options.rate:g} "
-                f"real time): {len(node.topics)} topics under {ros2.namespace}",
+                f"sim-node {name} ready (domain {ros2.domain_id}, x{options.rate:g} "
+                f"real time): {len(node.topics)} topics under {ros2.node.get_namespace()}",
                 file=out,
                 flush=True,
             )
@@ -230,7 +298,18 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
     finally:
         for number in signals:
             loop.remove_signal_handler(number)
-    print(f"sim-node {ros2.full_name} stopped", file=out, flush=True)
+    print(f"sim-node {name} stopped", file=out, flush=True)
+
+
+@contextlib.asynccontextmanager
+async def _rosout(ros2: Ros2Node) -> AsyncIterator[None]:
+    """The process's log records on ``/rosout`` too, while the node runs."""
+    handler = RosoutHandler(ros2.node.get_logger())
+    logging.getLogger().addHandler(handler)
+    try:
+        yield
+    finally:
+        logging.getLogger().removeHandler(handler)
 
 
 def run_sim_node(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:

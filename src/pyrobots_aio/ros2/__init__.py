@@ -21,6 +21,8 @@ running inside ``async with robot``:
 conversions, used by ``pyrobots-aio sim-node`` as well. `STANDARD` is the
 standard messages' (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock
 ``Bool``); the motion actions and the random walk run on it as on the simulator.
+Its `TfBuffer` keeps what ``tf`` and ``tf_static`` broadcast, so ``robot.poses``
+places a base's sensor frames; `TfBroadcaster` is sim-node's end of tf.
 
 `build_interfaces` builds the interface packages PyPI lacks (``tf2_msgs``,
 ``irobot_create_msgs``) from the definitions pyrobots_aio carries, into this
@@ -50,6 +52,9 @@ from ._profiles import profile_named as profile_named
 from ._rclpy import qos_profile as qos_profile
 from ._rclpy import ros_name as ros_name
 from ._robot import Ros2Robot as Ros2Robot
+from ._tf import TfBroadcaster as TfBroadcaster
+from ._tf import TfBuffer as TfBuffer
+from ._tf import tf_available as tf_available
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
@@ -67,6 +72,8 @@ __all__ = [
     "Ros2Publisher",
     "Ros2Robot",
     "Ros2Subscription",
+    "TfBroadcaster",
+    "TfBuffer",
     "ToState",
     "Topic",
     "attach_ros2",
@@ -77,4 +84,5 @@ __all__ = [
     "qos_profile",
     "ros_name",
     "staleness",
+    "tf_available",
 ]

@@ -48,6 +48,15 @@ def _positive(name: str, value: float) -> float:
     return float(value)
 
 
+def _strings(name: str, values: Iterable[str]) -> list[str]:
+    given: object = values  # checked at run time: a lone string would be split into letters
+    items = [] if isinstance(given, str) else list(values)
+    if isinstance(given, str) or not all(isinstance(v, str) for v in items):
+        msg = f"{name} must be a list of strings, such as ['-r', 'odom:=odometry'], got {values!r}"
+        raise TypeError(msg)
+    return items
+
+
 class Ros2Node:
     """A robot's ROS 2 node: topics into ``robot.state``, publishers, services, goals.
 
@@ -64,8 +73,14 @@ class Ros2Node:
         name: The node's name (``ros2 node list`` shows it).
         namespace: Its namespace (``/robot1``): relative topic names land under it.
         domain_id: The DDS domain; default: ``ROS_DOMAIN_ID`` (0 if unset).
-        use_sim_time: Stamp messages with ``/clock``'s time rather than the system's.
+        use_sim_time: Stamp messages with ``/clock``'s time rather than the system's
+            (None: as ``ros_args`` say, ``-p use_sim_time:=true``).
         remap: Topic and service remappings, ``{"cmd_vel": "/other/cmd_vel"}``.
+        ros_args: ROS arguments, as after ``--ros-args`` on a ROS 2 command line
+            (``["-r", "odom:=odometry", "-p", "use_sim_time:=true"]``).
+        standalone: The node is its process's own (a command, as ``sim-node``):
+            it logs to ``/rosout`` and serves its parameters, and ``ros_args``
+            set rcl's logging too (``--log-level``).
         diagnostics_period: Seconds between two ``/diagnostics`` messages (None: none).
         stale_after: Seconds after which a watched state key counts as stale.
         health_keys: State keys watched by ``/diagnostics`` besides those the
@@ -90,8 +105,10 @@ class Ros2Node:
         *,
         namespace: str = "/",
         domain_id: int | None = None,
-        use_sim_time: bool = False,
+        use_sim_time: bool | None = False,
         remap: Mapping[str, str] | None = None,
+        ros_args: Iterable[str] = (),
+        standalone: bool = False,
         diagnostics_period: float | None = 1.0,
         stale_after: float = 1.0,
         health_keys: Iterable[str] = (),
@@ -113,13 +130,14 @@ class Ros2Node:
         )
         self._stale_after = _positive("stale_after", stale_after)
         self._health_keys = tuple(health_keys)
-        ros_args = [arg for old, new in (remap or {}).items() for arg in ("-r", f"{old}:={new}")]
+        remaps = [arg for old, new in (remap or {}).items() for arg in ("-r", f"{old}:={new}")]
         self._thread = RosThread(
             self.name,
             self.namespace,
             domain_id=domain_id,
-            use_sim_time=bool(use_sim_time),
-            ros_args=ros_args,
+            use_sim_time=None if use_sim_time is None else bool(use_sim_time),
+            ros_args=[*remaps, *_strings("ros_args", ros_args)],
+            citizen=standalone,
         )
         self._robot: Robot | None = None
         self._subscriptions: list[Ros2Subscription] = []
