@@ -107,17 +107,32 @@ def test_a_stamp_going_back_or_a_turn_too_far_is_a_reset_and_the_pose_goes_on(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     caplog.set_level(logging.WARNING)
-    resets = OdometryResets("/odom")
-    pose = resets.pose(reading(2.0, 0.5, 10.0), (0.0, 0.0, 0.0))
+    resets = OdometryResets("/odom", horizon=1.0)
+    pose = resets.pose(reading(2.0, 0.5, 10.0), (0.0, 0.0, 0.0), 0.0)
     assert pose == (2.0, 0.0, 0.5)
-    pose = resets.pose(reading(2.01, 0.52, 10.02), pose)  # an ordinary step: no reset
+    pose = resets.pose(reading(2.01, 0.52, 10.02), pose, 0.02)  # an ordinary step: no reset
     assert pose == pytest.approx((2.01, 0.0, 0.52))
-    pose = resets.pose(reading(2.02, 0.53, 1.0), pose)  # the stamp went back: a reset
+    pose = resets.pose(reading(2.02, 0.53, 1.0), pose, 0.04)  # the stamp went back: a reset
     assert pose == pytest.approx((2.01, 0.0, 0.52))
-    pose = resets.pose(reading(2.12, 0.53, 1.02), pose)  # and then on, in the rebased frame
+    pose = resets.pose(reading(2.12, 0.53, 1.02), pose, 0.06)  # then on, in the rebased frame
     # (0.1 m along the raw frame's x, which is turned by -0.01 rad in the robot's)
     assert pose == pytest.approx((2.01 + 0.1 * math.cos(0.01), -0.1 * math.sin(0.01), 0.52))
-    pose = resets.pose(reading(2.12, -1.0, 1.04), pose)  # turned 1.5 rad in 20 ms: a reset
+    pose = resets.pose(reading(2.12, -1.0, 1.04), pose, 0.08)  # turned 1.5 rad in 20 ms: reset
     assert pose[2] == pytest.approx(0.52)
     assert resets.count == 2
     assert len(caplog.records) == 2
+
+
+def test_a_jump_that_the_reported_speeds_explain_is_no_reset() -> None:
+    resets = OdometryResets("/odom", horizon=1.0)
+    turning = Reading((0.3, 0.0, 0.25), 0.0, 0.9, 80.5)
+    resets.pose(turning, (0.0, 0.0, 0.0), 0.0)
+    later = Reading((0.3, 0.0, 0.8), 0.0, 0.9, 81.1)  # 0.55 rad in 0.6 s at 0.9 rad/s
+    assert resets.pose(later, (0.3, 0.0, 0.25), 0.6) == later.pose
+    unstamped = OdometryResets("/odom", horizon=1.0)
+    unstamped.pose(Reading((0.0, 0.0, 0.0), 0.3, 0.0), (0.0, 0.0, 0.0), 10.0)
+    farther = Reading((0.4, 0.0, 0.0), 0.3, 0.0)  # 0.4 m in 1.5 s (counted 1 s) at 0.3 m/s
+    assert unstamped.pose(farther, (0.0, 0.0, 0.0), 11.5) == farther.pose
+    stopped = Reading((0.0, 0.0, 0.0), 0.0, 0.0)  # and 0.4 m back at rest: a reset
+    assert unstamped.pose(stopped, farther.pose, 11.52) == farther.pose
+    assert (resets.count, unstamped.count) == (0, 1)

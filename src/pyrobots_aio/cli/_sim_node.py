@@ -43,6 +43,11 @@ topic                         type                          QoS
   ``bumper_left``/``_right``, ``imu``, ``charge_contacts``). Relative names:
   ``/tf`` at the root namespace, ``<namespace>/tf`` under one (as a namespaced
   Create 3 has them). Needs ``tf2_msgs`` (``pyrobots-aio ros2 interfaces build``).
+- ``--ros-args ...`` (last on the line): remapping, ``-p use_sim_time:=true``
+  (stamps and ``/clock`` then simulated, from 0), ``--log-level``. The options
+  are served as read-only parameters; the log goes to ``/rosout`` too. A
+  command that is not finite stops the wheels; a burst of them is logged once
+  at its start and once, with the count, at its end.
 - Stamps: the system clock in real time; the simulation's clock (which
   ``/clock`` carries, from 0) when ``--rate`` is not 1.
 """

@@ -178,7 +178,10 @@ class Ros2Backend:
         self._robot: Robot | None = None
         self._running = contextlib.AsyncExitStack()
         self._odom: Pose2D = (0.0, 0.0, 0.0)
-        self._resets = OdometryResets(self.topics[self.profile.odometry.role])
+        # Beyond twice the timeout the base went stale and was told to stop.
+        self._resets = OdometryResets(
+            self.topics[self.profile.odometry.role], horizon=2 * self.odom_timeout
+        )
         self._period = _FIRST_PERIOD
         self._reading: Odometry | None = None  # the odometry message being delivered
         self._stamp: float | None = None
@@ -373,7 +376,8 @@ class Ros2Backend:
     def _on_odometry(self, message: Any) -> Mapping[str, object]:
         reading = self._reading = self.profile.odometry.decode(message)
         resets = self._resets.count
-        self._odom = self._resets.pose(reading, self._odom)
+        assert self._robot is not None  # running
+        self._odom = self._resets.pose(reading, self._odom, self._robot.time())
         if self._resets.count != resets:
             return {"v": reading.v, "w": reading.w, "odom_resets": self._resets.count}
         return {"v": reading.v, "w": reading.w}
