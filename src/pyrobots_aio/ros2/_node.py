@@ -66,8 +66,9 @@ class Ros2Node:
     `attach_ros2`; the node lives inside ``async with robot``.
 
     ``ROS_DOMAIN_ID`` and ``ROS_AUTOMATIC_DISCOVERY_RANGE`` are read from the
-    environment, as every ROS 2 process does (set the range to ``LOCALHOST``
-    to keep discovery on this machine).
+    environment, as every ROS 2 process does; with neither the range nor
+    ``ROS_LOCALHOST_ONLY`` set, discovery stays on this machine (``LOCALHOST``,
+    where ROS 2 alone would use the subnet).
 
     Args:
         name: The node's name (``ros2 node list`` shows it).
