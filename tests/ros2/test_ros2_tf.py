@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import sys
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from geometry_msgs.msg import TransformStamped  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
-from pyrobots_aio import UnknownFrameError  # noqa: E402
+from pyrobots_aio import Ros2Error, Ros2UnavailableError, UnknownFrameError  # noqa: E402
 from pyrobots_aio.ros2 import Ros2Robot, TfBuffer  # noqa: E402
 from pyrobots_aio.ros2._tf import tf_qos  # noqa: E402
 
@@ -130,3 +131,24 @@ async def test_ros2_robot_poses_resolve_the_sensor_frames_as_sim_robot_does() ->
     assert message.startswith("unknown frame 'laser'; known frames: [")
     assert "'ir_front_left'" in message
     assert "'base_link'" in message
+
+
+def test_without_tf2_msgs_tf_is_off_or_its_absence_says_how_to_build_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setitem(sys.modules, "tf2_msgs.msg", None)  # as if never built
+    robot = Ros2Robot(namespace="/no_tf")
+    assert robot.ros.topics.keys().isdisjoint({"tf", "tf_static"})
+    with pytest.raises(Ros2Error) as caught:
+        _ = robot.tf
+    assert str(caught.value) == (
+        "<Ros2Robot /no_tf/pyrobots_aio stopped> has no tf buffer: it exists inside 'async "
+        "with' when tf2_msgs imports (build it with: pyrobots-aio ros2 interfaces build "
+        "tf2_msgs) and tf is not False"
+    )
+    with pytest.raises(Ros2UnavailableError) as missing:
+        Ros2Robot(namespace="/no_tf", tf=True)
+    assert str(missing.value).startswith("tf needs the tf2_msgs interfaces, which cannot be ")
+    assert str(missing.value).endswith(
+        "; build them with: pyrobots-aio ros2 interfaces build tf2_msgs"
+    )
