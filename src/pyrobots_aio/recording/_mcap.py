@@ -189,7 +189,7 @@ class McapRecorder(Recorder[McapSink]):
         logs: Also record the records of the ``pyrobots_aio`` logger (those its
             level lets through) on ``/pyrobots/log`` while attached.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import SimRobot
         >>> from pyrobots_aio.recording import McapRecorder
         >>> robot = SimRobot()  # doctest: +SKIP

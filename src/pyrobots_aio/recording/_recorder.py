@@ -152,7 +152,7 @@ class Recorder(Generic[SinkT_co]):
         options: What to sample and the header's free facts (default: every
             state key at every change, the pose of ``base_link``).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import ActionFinished, Robot, action
         >>> from pyrobots_aio.recording import MemorySink, Recorder

@@ -590,7 +590,7 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
         ``polygon.plot.bool``. Lone surrogates from the recording are
         spelled out as backslash escapes, so that the page can be written as UTF-8.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.recording import load, render_timeline_html
         >>> page = render_timeline_html(load("run.jsonl"))  # doctest: +SKIP
         >>> open("run.html", "w").write(page)  # doctest: +SKIP

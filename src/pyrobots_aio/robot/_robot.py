@@ -81,7 +81,7 @@ class Robot(StateMethods, EmergencyStop):
             ends the process in the middle of a recorder's close.
             False: leave the signals alone (see `pyrobots_aio.cli.stop_on_signals`).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot, action
         >>> @action
@@ -302,7 +302,7 @@ class Robot(StateMethods, EmergencyStop):
             PyRobotsError: The robot is running, or ``name`` is taken (an
                 attribute, an attached action or another extension).
 
-        Example:
+        Examples:
             >>> class Lamp:
             ...     async def start(self, robot: Robot) -> None:
             ...         robot.state.lamp = "on"
@@ -351,7 +351,7 @@ class Robot(StateMethods, EmergencyStop):
             EventLoopError: Called from the robot's own loop (it would deadlock:
                 await the coroutine there instead).
 
-        Example:
+        Examples:
             >>> import asyncio, threading
             >>> async def main() -> str:
             ...     async with Robot() as robot:
@@ -436,7 +436,7 @@ class Robot(StateMethods, EmergencyStop):
             TooManyAbandonedCalls: 32 abandoned calls still run (give the
                 blocking calls a timeout so that they return).
 
-        Example:
+        Examples:
             >>> import asyncio, time
             >>> async def main() -> float:
             ...     async with Robot() as robot:

@@ -145,7 +145,7 @@ class SimWorld:
             needs; the message names the file and the problem.
         ValueError: ``physics_dt`` is not a positive number.
 
-    Example:
+    Examples:
         >>> world = SimWorld(seed=1)
         >>> world.set_command(0.2, 0.0)
         >>> world.advance(1.0)
@@ -491,7 +491,7 @@ class SimWorld:
         ``radius`` (cylinders; other shapes by their bounding radius). Replay
         draws its map from this.
 
-        Example:
+        Examples:
             >>> world = SimWorld()
             >>> [s["name"] for s in world.floor_plan() if s["kind"] == "dock"]
             ['dock']
