@@ -74,12 +74,13 @@ ACTIONS, RESOURCES, MONITORS = "/pyrobots/actions", "/pyrobots/resources", "/pyr
 STATE_PREFIX = "/pyrobots/state/"
 POSE, TF, LOG = "/pyrobots/pose", "/tf", "/pyrobots/log"
 MAP = "map"
-EVENT, SAMPLE = "pyrobots_aio.ExecEvent", "pyrobots_aio.StateSample"
-POSE_IN_FRAME, FRAME_TRANSFORMS, FOXGLOVE_LOG = (
-    "foxglove.PoseInFrame",
-    "foxglove.FrameTransforms",
-    "foxglove.Log",
-)
+EVENT = "pyrobots_aio.ExecEvent"
+"""The schema of the executive's events (``/pyrobots/actions``, ``resources``, ``monitors``)."""
+SAMPLE = "pyrobots_aio.StateSample"
+"""The schema of a state key's values (``/pyrobots/state/<key>``)."""
+POSE_IN_FRAME = "foxglove.PoseInFrame"
+"""Foxglove's well-known schema of the robot's pose (``/pyrobots/pose``)."""
+FRAME_TRANSFORMS, FOXGLOVE_LOG = "foxglove.FrameTransforms", "foxglove.Log"
 
 _TIME = {
     "type": "object",
