@@ -6,10 +6,15 @@ lines and a simulated robot's arena, through Foxglove's own SDK (the ``live``
 extra, ``foxglove-sdk``), on 127.0.0.1 unless told otherwise. The ``time`` of
 its events and samples counts seconds from the robot's start. The arena is
 sent to each client that subscribes to it (it never changes; a client that
-connects late still gets it). It runs from ``async with robot`` to its end,
-when its server is stopped and its port closed. (The SDK serves from one
-runtime of native threads per process, shared by every server, idle once they
-stop, shut down by the SDK at exit: no Python thread, and none more per robot.)
+connects late still gets it). The SDK speaks the ``foxglove.sdk.v1``
+subprotocol only, which the Foxglove app offers; a client that offers only
+``foxglove.websocket.v1`` (older Foxglove Studio, Lichtblick) is refused with
+HTTP 400, and the server's log says why (`HANDSHAKE_HINT`). It runs from
+``async with robot`` to its end, when its server is stopped and its port
+closed (unless it was given: ``Robot(serve=LiveView(PORT))``). (The SDK
+serves from one runtime of native threads per process, shared by every server,
+idle once they stop, shut down by the SDK at exit: no Python thread, and none
+more per robot.)
 Only the state writes and events of the robot's loop thread are published, in
 that thread; publishing costs a JSON encoding and a queue push per message.
 """
@@ -41,6 +46,29 @@ LOGGER = "pyrobots_aio"
 
 CLOSE_LIMIT = 2.0
 """Seconds `LiveView.stop` waits at most for the SDK to let go of the port."""
+SUBPROTOCOL = "foxglove.sdk.v1"
+"""The WebSocket subprotocol the SDK's server speaks (it refuses a client not offering it)."""
+HANDSHAKE_HINT = (
+    f": the live view speaks the {SUBPROTOCOL} WebSocket subprotocol, which the Foxglove app "
+    "offers; a client that offers only foxglove.websocket.v1 (older Foxglove Studio and "
+    "Lichtblick releases) gets HTTP 400 'Missing expected sec-websocket-protocol header': "
+    "update it"
+)
+"""What the SDK's 'handshake failed' log line is told, for whoever reads the server's log."""
+
+
+class _HandshakeHint(logging.Filter):
+    """Completes the SDK's ``Dropping client ...: handshake failed`` with the likely cause."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        if text.endswith("handshake failed"):
+            record.msg, record.args = text + HANDSHAKE_HINT, None
+        return True
+
+
+_SDK_SERVER_LOG = logging.getLogger("foxglove.websocket.server")
+_SDK_SERVER_LOG.addFilter(_HandshakeHint())  # one filter, on the SDK's own logger only
 
 
 def _port_free(host: str, port: int) -> bool:
