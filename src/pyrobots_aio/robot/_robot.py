@@ -64,7 +64,9 @@ class Robot(StateMethods, EmergencyStop):
         backend: The backend that connects this robot to hardware or a simulator.
         serve: A TCP port: while the robot runs, stream it live on 127.0.0.1 over
             Foxglove's WebSocket protocol (the ``live`` extra); 0 picks a free port,
-            which ``robot.live.port`` tells once the robot runs.
+            which ``robot.live.port`` tells once the robot runs. Or a `LiveView`
+            of your own, which the robot streams to while it runs and leaves
+            serving after (Foxglove stays connected; ``live.stop()`` ends it).
         block_threshold: Seconds the event loop may go without turning before a
             watchdog thread logs a WARNING naming the action that blocks it, with
             its ``file:line`` and stack, and records a ``loop.blocked`` event
@@ -104,7 +106,7 @@ class Robot(StateMethods, EmergencyStop):
         cancel_grace: float = 2.0,
         instruments: Iterable[Instrument] = (),
         backend: Backend | None = None,
-        serve: int | None = None,
+        serve: int | LiveView | None = None,
         block_threshold: float | None = DEFAULT_BLOCK_THRESHOLD,
         handle_signals: bool = True,
     ) -> None:
@@ -137,7 +139,8 @@ class Robot(StateMethods, EmergencyStop):
         self.events = EventManager(self, self._state, self._executive, self.instruments)
         self.poses = PoseManager()
         self._backend = backend
-        self.live = None if serve is None else LiveView(serve)
+        self.live = serve if isinstance(serve, LiveView) or serve is None else LiveView(serve)
+        self._owns_live = not isinstance(serve, LiveView)
         for item in actions:
             self._attach(item)
 
@@ -257,7 +260,7 @@ class Robot(StateMethods, EmergencyStop):
         stack.push_async_callback(self._close_actions)  # if a start fails (a run closed it above)
         if self.live is not None:
             self.live.start(self)
-            stack.callback(self.live.stop)
+            stack.callback(self.live.stop if self._owns_live else self.live.detach)
         for part in self._parts():
             await part.start(self)
             stack.push_async_callback(part.stop)
