@@ -23,6 +23,7 @@ from collections import Counter
 from typing import TYPE_CHECKING
 
 import pytest
+from devtools import FLAGS, Browser
 from test_recording_pauses import SPELLS, _play
 
 from pyrobots_aio.recording import JsonlRecorder, load, render_timeline_html
@@ -112,14 +113,7 @@ def _chromium() -> str:
 def _browse(page: Path, profile: Path, *args: str) -> subprocess.CompletedProcess[str]:
     command = [
         _chromium(),
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--no-first-run",
-        "--hide-scrollbars",
+        *FLAGS,
         f"--user-data-dir={profile}",
         "--window-size=1400,1000",
         *args,
