@@ -9,6 +9,7 @@ person's mouse, and ``evaluate`` reads back what the page shows.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import select
@@ -33,6 +34,15 @@ FLAGS = (
 """A quiet headless chromium: no network of its own, no first-run pages."""
 HANG_GUARD = 90.0
 """Seconds without the answer awaited before the test fails (a hang guard, not a timing)."""
+
+
+def _above_4(fds: tuple[int, int]) -> tuple[int, int]:
+    """The pipe's ends moved above 4, so that making them the child's 3 and 4 clobbers neither."""
+    moved = (fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 5) for fd in fds)
+    first, second = moved
+    for fd in fds:
+        os.close(fd)
+    return first, second
 
 
 class BrowserError(AssertionError):
@@ -72,8 +82,8 @@ class Browser:
         self.events: list[dict[str, Any]] = []
         self._next = 0
         self._buffer = b""
-        ours_in, theirs_out = os.pipe()  # chromium writes on its fd 4
-        theirs_in, ours_out = os.pipe()  # chromium reads on its fd 3
+        ours_in, theirs_out = _above_4(os.pipe())  # chromium writes on its fd 4
+        theirs_in, ours_out = _above_4(os.pipe())  # chromium reads on its fd 3
         command = [
             chromium,
             *FLAGS,
@@ -82,7 +92,8 @@ class Browser:
             "about:blank",
         ]
         self._process = subprocess.Popen(
-            ["/bin/sh", "-c", f'exec "$0" "$@" 3<&{theirs_in} 4>&{theirs_out}', *command],
+            # bash, not sh: dash redirects only the descriptors 0 to 9.
+            ["bash", "-c", f'exec "$0" "$@" 3<&{theirs_in} 4>&{theirs_out}', *command],
             pass_fds=(theirs_in, theirs_out),
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,

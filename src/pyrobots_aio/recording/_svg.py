@@ -81,14 +81,15 @@ def nice_step(span: float, most: int) -> float:
 def tick_text(value: float, step: float) -> str:
     """``value``, a multiple of ``step``, with the decimals ``step`` needs and no float noise.
 
-    ``0.30000000000000004`` on a step of 0.1 reads ``0.3``; a value too large or
-    small for plain decimals reads in three significant digits (``1e+18``).
+    ``0.30000000000000004`` on a step of 0.1 reads ``0.3``, zero reads ``0``; a
+    value too large or small for plain decimals reads in three significant
+    digits (``1e+18``).
     """
     decimals = max(0, -math.floor(math.log10(step))) if 0 < step < math.inf else 0
     if decimals > 6 or abs(value) >= 1e9:
         return f"{value:.3g}"
     text = f"{value:.{decimals}f}"
-    return text.removeprefix("-") if float(text) == 0 else text  # no "-0.0"
+    return "0" if float(text) == 0 else text  # not "-0.0", nor "0.0000"
 
 
 def nice_range(low: float, high: float, most: int) -> tuple[float, float, float]:
