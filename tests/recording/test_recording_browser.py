@@ -304,8 +304,22 @@ def test_the_map_path_and_plots_are_drawn_where_the_robot_went(tmp_path: Path) -
     assert sum(_near(seen, colour, within=2) for colour in trail) > 1000  # the path itself
 
 
+def _action(id_: int, begin: float, end: float) -> list[dict[str, Any]]:
+    def event(t: float, kind: str, **data: object) -> dict[str, Any]:
+        return {"t": t, "action": id_, "kind": kind, "name": "drive", "data": data}
+
+    return [
+        event(begin, "action.spawned", parent=None),
+        event(begin, "action.started"),
+        event(end, "action.finished", outcome="succeeded"),
+    ]
+
+
 def _known(path: Path) -> None:
-    """Ten seconds whose values step on each whole second ``i``; bumps at 3 and 7, a cliff at 5."""
+    """Ten seconds whose values step on each whole second ``i``; bumps at 3 and 7, a cliff at 5.
+
+    drive#1 runs from 1 to 1.2 s, too short for its label, and drive#2 at once after it.
+    """
     header = {"format": "pyrobots_aio.recording", "version": 1, "t0": 0.0}
     header["floor_plan"] = [{"name": "wall", "shape": "box", "x": 0.5, "y": 1, "half": [1, 0.05]}]
     samples = [
@@ -324,7 +338,10 @@ def _known(path: Path) -> None:
         }
         for i in range(10)
     ]
-    lines = [header, *samples, {"end": 10.0, "events": len(samples)}]
+    records = sorted(
+        [*samples, *_action(1, 1.0, 1.2), *_action(2, 1.25, 3.0)], key=lambda r: r["t"]
+    )
+    lines = [header, *records, {"end": 10.0, "events": len(records)}]
     path.write_text("".join(json.dumps(line) + "\n" for line in lines))
 
 
@@ -356,6 +373,11 @@ READOUT = """(function () {
           stamp: spans.length ? spans[0].textContent : "", values: values,
           cursor: document.querySelector("svg.timeline .cursor-time").textContent};
 })()"""
+LABEL = """Array.prototype.filter.call(
+  document.querySelectorAll("svg.timeline text.in"),
+  function (t) { return t.textContent === "drive#1"; }
+)[0].getBoundingClientRect().width"""
+"""How wide drive#1's label is drawn (0: hidden)."""
 TICKS = """Array.prototype.map.call(
   document.querySelectorAll("svg.%s g.axis.time text"), function (t) { return t.textContent; }
 ).slice(1)"""
@@ -386,6 +408,7 @@ def test_the_page_zooms_pans_and_reads_values_at_the_cursor(tmp_path: Path) -> N
         page = browser.open(html.as_uri(), 1400, 3000)  # tall: every row in sight
         assert _readout(page)["hidden"]
         assert page.evaluate(TICKS % "timeline") == [str(i) for i in range(11)]
+        assert page.evaluate(LABEL) == 0  # drive#1's bar is 19 px, its label needs 47 px
 
         # The cursor: each row's value at that moment, on every figure and on the map.
         at = _geometry(page, 3.5)
@@ -421,6 +444,7 @@ def test_the_page_zooms_pans_and_reads_values_at_the_cursor(tmp_path: Path) -> N
             'document.querySelector("svg.timeline rect.plot.bool").getBoundingClientRect().width'
         )
         assert pulse == pytest.approx(at["width"] / (b - a), abs=1.0)  # the bump at 3 s, 1 s long
+        assert 30 < page.evaluate(LABEL) < 47  # 2.7 times wider, the bar holds its label
 
         # The readout, zoomed: the cursor is finer.
         at = _geometry(page, 4.25)

@@ -28,6 +28,9 @@ if TYPE_CHECKING:
 
 PLOT_H = 40
 ROW = PLOT_H + 10
+FLAG_H = 14
+"""Height of a flag's (a boolean's) pulses: they need no scale."""
+FLAG_ROW = FLAG_H + 8
 MIN_PULSE = 3.0
 """Narrowest pulse drawn, in pixels."""
 UNITS = {"v": "m/s", "w": "rad/s", "encoder_left": "rad", "encoder_right": "rad"}
@@ -52,6 +55,16 @@ def plotted(recording: Recording) -> list[Series]:
         "encoder_right",
     ]
     return [samples[k] for k in keys if k in samples and len(samples[k])]
+
+
+def is_flag(series: Series) -> bool:
+    """Whether ``series`` holds only booleans (drawn as pulses)."""
+    return all(isinstance(v, bool) for v in series.values)
+
+
+def row_height(series: Series) -> float:
+    """The pixels of the row that draws ``series``."""
+    return FLAG_ROW if is_flag(series) else ROW
 
 
 def unit(key: str) -> str:
@@ -91,15 +104,15 @@ def _reduced(column: list[tuple[float, float]]) -> list[tuple[float, float]]:
 
 def draw_plot(series: Series, scale: Scale, top: float, stop: float) -> tuple[list[str], list[str]]:
     """One plot row from ``top``: its label and axis, and what is drawn on the time axis."""
-    key, flag = series.key, all(isinstance(v, bool) for v in series.values)
+    key, flag = series.key, is_flag(series)
     label = f"{key} ({unit(key)})" if unit(key) else key
     fixed = [
-        f'<text class="label" x="22" y="{top + 14:.1f}" data-key="{esc(key)}" '
-        f'data-unit="{esc(unit(key))}" data-kind="{"flag" if flag else "number"}">'
-        f"{esc(label)}</text>"
+        f'<text class="label" x="22" y="{top + (FLAG_H - 2 if flag else 14):.1f}" '
+        f'data-key="{esc(key)}" data-unit="{esc(unit(key))}" '
+        f'data-kind="{"flag" if flag else "number"}">{esc(label)}</text>'
     ]
     if flag:
-        return [*fixed, _axis(top, (0.0, 1.0, 1.0))], _draw_bool(series, scale, top, stop)
+        return [*fixed, _baseline(top + FLAG_H)], _draw_bool(series, scale, top, stop)
     points = _numbers(series)
     if not points:
         return fixed, []
@@ -138,9 +151,13 @@ def _axis(top: float, axis: tuple[float, float, float]) -> str:
         f'<text class="tick" x="{LABEL_W - 6}" y="{top + 8:.1f}" text-anchor="end">'
         f"{tick_text(ceiling, step)}</text>"
         f'<text class="tick" x="{LABEL_W - 6}" y="{top + PLOT_H:.1f}" text-anchor="end">'
-        f"{tick_text(bottom, step)}</text>"
-        f'<line class="baseline" x1="{LABEL_W}" y1="{top + PLOT_H:.1f}" x2="{LABEL_W + PLOT_W}" '
-        f'y2="{top + PLOT_H:.1f}"/>'
+        f"{tick_text(bottom, step)}</text>" + _baseline(top + PLOT_H)
+    )
+
+
+def _baseline(y: float) -> str:
+    return (
+        f'<line class="baseline" x1="{LABEL_W}" y1="{y:.1f}" x2="{LABEL_W + PLOT_W}" y2="{y:.1f}"/>'
     )
 
 
@@ -157,7 +174,7 @@ def _draw_bool(series: Series, scale: Scale, top: float, stop: float) -> list[st
             t0, t1 = began - scale.start, time - scale.start
             parts.append(
                 f'<rect class="plot bool" x="{x:.1f}" y="{top:.1f}" width="{width:.1f}" '
-                f'height="{PLOT_H}" data-key="{key}" data-t0="{t0:.3f}" data-t1="{t1:.3f}">'
+                f'height="{FLAG_H}" data-key="{key}" data-t0="{t0:.3f}" data-t1="{t1:.3f}">'
                 f"<title>{key} true from {t0:.3f} to {t1:.3f} s</title></rect>"
             )
             began = None

@@ -11,8 +11,9 @@ What it does, on the figures that share the time axis (``svg[data-x0]``):
   most `MAX_ZOOM` times), a drag pans, a double-click or the "reset zoom"
   button shows the whole run again; every figure follows. What a figure draws
   on the time axis sits in its ``svg.zoom``, whose shapes move (their
-  original x is kept) and whose lines are rescaled; the time axis is drawn
-  again with round steps (1, 2 or 5 times a power of ten, as `_svg.ticks`).
+  original x is kept) and whose lines are rescaled; a bar's label that did
+  not fit shows once the bar is ``data-fit`` times wider; the time axis is
+  drawn again with round steps (1, 2 or 5 times a power of ten, as `_svg.ticks`).
   Each figure's ``data-view`` holds the seconds shown ("from to").
 
 Built only with ``textContent`` and ``setAttribute``: text from the recording
@@ -156,7 +157,8 @@ SCRIPT = (
       shapes, function (el) {
         var move = /translate\\(([^,]+),([^)]+)\\)/.exec(el.getAttribute("transform") || "");
         return {el: el, tag: el.tagName, move: move, x: +el.getAttribute("x"),
-          width: +el.getAttribute("width"), x1: +el.getAttribute("x1"), x2: +el.getAttribute("x2")};
+          width: +el.getAttribute("width"), x1: +el.getAttribute("x1"), x2: +el.getAttribute("x2"),
+          fit: +(el.dataset.fit || 0)};
       })};
   });
   function magnification() { return span / (view.b - view.a); }
@@ -182,6 +184,7 @@ SCRIPT = (
           el.setAttribute("x1", place(s.x1)); el.setAttribute("x2", place(s.x2));
         } else if (s.tag === "text") {
           el.setAttribute("x", place(s.x));
+          if (s.fit) { el.style.display = z >= s.fit ? "inline" : ""; }
         } else if (s.tag === "polyline") {
           el.setAttribute("transform", "translate(" + shift + ",0) scale(" + z + ",1)");
         } else if (s.move) {

@@ -14,15 +14,20 @@ Top to bottom:
   own tooltip; instances of one path that overlap take extra lanes. Below:
   each resource's holds (coloured by holder, named in the legend), waits and
   preemptions; monitor firings; boolean state; then **plots** of ``v``,
-  ``w``, each IR range and the bumper (`_plots`);
+  ``w``, each IR range, the bumper, and the cliffs, battery and encoders
+  when recorded (`_plots`);
 - actions started and events (monitor firings) per bucket of time (figure 2),
-  on the same time axis.
+  on the same time axis;
+- a readout of each plotted value at the cursor, fixed at the window's bottom.
 
 Hovering the path shows the moment on the timeline and plots (a cursor), and
-hovering the timeline shows where the robot was on the map: a small static
-script does it, reading only ``data-`` attributes. Inline CSS, SVG and that
-script; no external asset. Every value taken from the recording is escaped,
-attributes included, and only plain words become class names.
+hovering the timeline shows where the robot was and faced on the map; the
+wheel zooms and a drag pans the time axis of every figure: a small static
+script does it (`_script`), reading only ``data-`` attributes. What each
+figure draws on the time axis sits in a nested ``svg.zoom`` over its plot
+area (which clips it); labels and y axes stay outside. Inline CSS, SVG and
+that script; no external asset. Every value taken from the recording is
+escaped, attributes included, and only plain words become class names.
 """
 
 from __future__ import annotations
@@ -38,7 +43,8 @@ from ._analysis import NOT_DONE, Analysis, Interval, Pause, Span, analyse, by_re
 from ._chart import rate_chart
 from ._format import paused
 from ._map import colour_bar, marks, render_map
-from ._plots import ROW, draw_plot, plotted
+from ._plots import draw_plot, plotted, row_height
+from ._script import MAX_ZOOM
 from ._script import SCRIPT as _SCRIPT
 from ._summary import summarize
 from ._svg import AXIS_H, BAR_H, ROW_H, WIDTH, Scale, cursor_marks, esc, timed_attributes
@@ -86,7 +92,7 @@ svg.map { background: #f5f3ee; border: 1px solid #ddd; }
 .legend i { display: inline-block; width: 12px; height: 12px; margin-right: 4px;
   vertical-align: -1px; box-shadow: inset 0 0 0 1px rgba(0, 0, 0, 0.3); }
 .ramp i { width: 8px; margin: 0; box-shadow: none; }
-svg.zoom polyline { vector-effect: non-scaling-stroke; }
+svg.zoom polyline { vector-effect: non-scaling-stroke; } text.later { display: none; }
 svg.timeline, svg.rates { cursor: crosshair; } svg.dragging { cursor: grabbing; }
 .heading { fill: none; stroke: #37474f; stroke-width: 1.5; opacity: 0.7; }
 .here-heading { fill: none; stroke: #d50000; stroke-width: 3; stroke-linecap: round; }
@@ -229,7 +235,8 @@ class _Canvas:
         """A bar on the current row, with a tooltip and ``text`` inside if it fits.
 
         Otherwise ``text`` goes right of the bar when the next ``room`` pixels
-        are free (and is left to the tooltip when they are not). ``least`` is
+        are free, else inside, hidden until the page's zoom makes room (and is
+        left to the tooltip when even `MAX_ZOOM` would not). ``least`` is
         the narrowest bar drawn, in pixels, so that short pulses show.
         ``paused`` spells (begin, end, tooltip) are hatched over the bar, under
         its text (dark when the bar begins paused).
@@ -243,13 +250,17 @@ class _Canvas:
             return
         y = self.y + BAR_H - 3
         needed = len(text) * _svg.CHAR_W + 4
+        dark = cls == "wait" or any(start <= begin < stop for start, stop, _ in paused)
+        ink, at = "in dark" if dark else "in", f'x="{x + 2:.1f}" y="{y:.1f}"'
         if w >= needed:
-            dark = cls == "wait" or any(start <= begin < stop for start, stop, _ in paused)
-            ink = "in dark" if dark else "in"
-            self.timed.append(f'<text class="{ink}" x="{x + 2:.1f}" y="{y:.1f}">{esc(text)}</text>')
+            self.timed.append(f'<text class="{ink}" {at}>{esc(text)}</text>')
         elif room - w >= needed + 2 and x + w + needed < WIDTH:
             self.timed.append(
                 f'<text class="out" x="{x + w + 3:.1f}" y="{y:.1f}">{esc(text)}</text>'
+            )
+        elif needed / w <= MAX_ZOOM:  # the page's zoom shows it once the bar is that much wider
+            self.timed.append(
+                f'<text class="{ink} later" {at} data-fit="{needed / w:.3f}">{esc(text)}</text>'
             )
 
     def lanes(
@@ -466,7 +477,7 @@ def _draw_plots(canvas: _Canvas, recording: Recording) -> None:
         fixed, timed = draw_plot(one, canvas.scale, canvas.y, canvas.stop)
         canvas.parts += fixed
         canvas.timed += timed
-        canvas.y += ROW
+        canvas.y += row_height(one)
 
 
 def _facts(recording: Recording) -> str:
