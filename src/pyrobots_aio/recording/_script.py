@@ -112,7 +112,8 @@ SCRIPT = (
   function valueAt(row, t) {
     if (row.flag) {
       var spells = pulses.get(row.key) || [], i = last(spells, t, first);
-      return i >= 0 && t < spells[i][1] ? "true" : "false";
+      // A pulse still on when the recording ended holds to its very end (times to 1 ms).
+      return i >= 0 && (t < spells[i][1] || spells[i][1] >= span - 5e-4) ? "true" : "false";
     }
     var line = lines.get(row.key), x = x0 + (span > 0 ? t / span * w : 0);
     var j = line ? last(line.xs, x + 1e-6, Number) : -1;
