@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 from ._svg import LABEL_W, PLOT_W, Scale, esc, nice_range, tick_text
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Sequence
+    from collections.abc import Callable, Iterable, Sequence
 
     from ._recording import Recording, Series
 
@@ -123,25 +123,36 @@ def draw_plot(series: Series, scale: Scale, top: float, stop: float) -> tuple[li
     def y(value: float) -> float:
         return top + PLOT_H - (value / 2 - bottom / 2) / half_span * PLOT_H
 
-    steps: list[str] = []
-    values: list[str] = []
-    level = ""
-    for time, value in _columns(points, scale):
-        x, text, was = f"{scale.x(time):.1f}", f"{value:.4g}", level
-        level = f"{y(value):.1f}"
-        if steps and (level, text) == (was, values[-1]):
-            continue  # no step: the value held reads and draws the same
-        if steps:
-            steps.append(f"{x},{was}")  # held until now
-        steps.append(f"{x},{level}")
-        values.append(text)
-    steps.append(f"{scale.x(stop):.1f},{level}")
+    steps, values = _steps(_columns(points, scale), scale, y)
+    steps.append(f"{scale.x(stop):.1f},{steps[-1].split(',')[1]}")  # the last value, held
     line = (
         f'<polyline class="plot" points="{" ".join(steps)}" data-key="{esc(key)}" '
         f'data-values="{" ".join(values)}"><title>{esc(label)}: {low:.3g} to {high:.3g}</title>'
         "</polyline>"
     )
     return [*fixed, _axis(top, (bottom, ceiling, step))], [line]
+
+
+def _steps(
+    points: Iterable[tuple[float, float]], scale: Scale, y: Callable[[float], float]
+) -> tuple[list[str], list[str]]:
+    """The polyline's "x,y" points, stepping to each value, and each value as the readout shows it.
+
+    A value that reads and draws as the one held is no step.
+    """
+    steps: list[str] = []
+    values: list[str] = []
+    level = ""
+    for time, value in points:
+        x, text, was = f"{scale.x(time):.1f}", f"{value:.4g}", level
+        level = f"{y(value):.1f}"
+        if steps and (level, text) == (was, values[-1]):
+            continue
+        if steps:
+            steps.append(f"{x},{was}")  # held until now
+        steps.append(f"{x},{level}")
+        values.append(text)
+    return steps, values
 
 
 def _axis(top: float, axis: tuple[float, float, float]) -> str:
