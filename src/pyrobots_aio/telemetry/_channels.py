@@ -75,11 +75,13 @@ STATE_PREFIX = "/pyrobots/state/"
 POSE, TF, LOG = "/pyrobots/pose", "/tf", "/pyrobots/log"
 MAP = "map"
 EVENT, SAMPLE = "pyrobots_aio.ExecEvent", "pyrobots_aio.StateSample"
+"""The schema names of the executive's own JSON channels: its events, and state samples."""
 POSE_IN_FRAME, FRAME_TRANSFORMS, FOXGLOVE_LOG = (
     "foxglove.PoseInFrame",
     "foxglove.FrameTransforms",
     "foxglove.Log",
 )
+"""The Foxglove well-known schemas the pose, ``/tf`` and log channels use."""
 
 _TIME = {
     "type": "object",
