@@ -310,7 +310,7 @@ class StallError(MotionError):
     """A motion action commanded motion and its odometry showed no progress: the robot is blocked.
 
     Raised by the motion actions of a `DriveBase` once no progress lasted the
-    base's ``stall_timeout`` (see `pyrobots_aio.motion.StallWatch`); the
+    base's ``stall_timeout`` (by default `pyrobots_aio.motion.STALL_TIMEOUT`); the
     wheels are stopped.
 
     Attributes:

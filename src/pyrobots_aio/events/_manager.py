@@ -20,7 +20,7 @@ from ._watch import Feed, Watch, check_buffer
 
 if TYPE_CHECKING:
     from .._core._instrument import Instruments
-    from ..actions import Executive
+    from ..actions._executive import Executive
     from ..state import StateStore
 
 Predicate = Callable[[Any], object]

@@ -24,7 +24,7 @@ from ..actions import ActionHandle, current_action
 
 if TYPE_CHECKING:
     from .._core._logging import ScopedLogger
-    from ..actions import Executive
+    from ..actions._executive import Executive
     from ..state import StateStore
 
 StopCallback = Callable[[str], Iterable[ActionHandle[Any]]]

@@ -26,8 +26,9 @@ from .._core._numbers import finite
 from .._core._signals import SignalStop
 from .._core._waiting import sleep_until
 from .._exceptions import ActionDefinitionError, ActionError, EventLoopError, PyRobotsError
-from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
-from ..actions import render_tree as _render_tree
+from ..actions import Action, ActionInfo, BoundAction, action, current_action
+from ..actions._executive import Executive
+from ..actions._info import render_tree as _render_tree
 from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager

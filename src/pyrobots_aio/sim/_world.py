@@ -34,7 +34,7 @@ import numpy as np
 
 from .. import ModelLoadError, SimulationUnavailableError, UnknownFrameError
 from .._core._numbers import finite
-from ..motion import limit_speeds
+from ..motion._math import limit_speeds
 from ._models import ModelLayout
 from ._models import model_path as _default_model_path
 from ._odometry import Odometry

@@ -37,6 +37,19 @@ from .._exceptions import ActionInterrupted, StallError
 from ..actions import action, lock
 from ..motion import WHEELS, DriveBase
 
+__all__ = [
+    "BACK_OFF",
+    "DETOUR",
+    "DOCK_ATTEMPTS",
+    "LEAVE_DOCK",
+    "REFLEX_PRIORITY",
+    "WalkReport",
+    "bumper_reflex",
+    "move",
+    "random_walk",
+    "suspending_reflex",
+]
+
 _log = logging.getLogger("pyrobots_aio.sim.random_walk")
 
 REFLEX_PRIORITY = 10

@@ -23,6 +23,7 @@ __all__ = ["ARENA", "SCENE_UPDATE", "SCENE_UPDATE_SCHEMA", "floor_plan", "scene_
 ARENA = "/pyrobots/arena"
 """The topic of the arena's scene."""
 SCENE_UPDATE = "foxglove.SceneUpdate"
+"""Foxglove's well-known schema of a 3D scene: the arena's walls, obstacles and dock."""
 DEFAULT_HEIGHT = 0.1
 """Metres a shape stands when its floor plan gives no height (recordings made before heights)."""
 _GREY = (0.6, 0.6, 0.6, 1.0)

@@ -24,7 +24,8 @@ import numpy as np
 
 from .. import UnknownFrameError
 from .._core._numbers import as_float, finite, shown
-from ..motion import SENSORS, DriveBase, SensorKind, TickingBackend, limit_speeds
+from ..motion import SENSORS, DriveBase, SensorKind, TickingBackend
+from ..motion._math import limit_speeds
 
 if TYPE_CHECKING:
     from collections.abc import Collection, Iterable
