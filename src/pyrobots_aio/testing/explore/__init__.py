@@ -34,6 +34,7 @@ except ImportError as missing:
     )
     raise ExploreUnavailableError(msg) from missing
 
+from .._profiles import PROFILES as PROFILES
 from ._invariants import SAFETY as SAFETY
 from ._invariants import Invariant as Invariant
 from ._invariants import completes as completes
@@ -58,7 +59,6 @@ from ._schedule import Reading as Reading
 from ._schedule import Silence as Silence
 from ._schedule import StaleOdometry as StaleOdometry
 from ._schedule import Target as Target
-from ._search import PROFILES as PROFILES
 
 del _hypothesis
 

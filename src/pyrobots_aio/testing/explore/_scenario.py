@@ -8,10 +8,11 @@ from typing import TYPE_CHECKING, Any, Generic
 
 from ..._exceptions import InvariantViolation
 from ...recording import load, render_timeline_html
+from .._profiles import chosen_profile
 from ._invariants import SAFETY, completes
 from ._run import R, Run, Runner
 from ._schedule import Bump, Hit
-from ._search import chosen_profile, search
+from ._search import search
 
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable, Sequence

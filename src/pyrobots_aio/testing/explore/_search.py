@@ -1,17 +1,7 @@
-"""The search: Hypothesis draws schedules, runs them, and shrinks the first that fails.
-
-Profiles (``profile=``, the ``--explore-profile`` pytest option, or the
-``PYROBOTS_AIO_EXPLORE`` environment variable; `DEFAULT_PROFILE` otherwise):
-
-- ``ci``: derandomized, the same examples at every run (no example database);
-- ``dev``: random examples; a failing one is saved in Hypothesis's example
-  database (``.hypothesis/``) and tried first at the next run;
-- ``long``: ``dev`` with ten times the examples, for a long local search.
-"""
+"""The search: Hypothesis draws schedules, runs them, and shrinks the first that fails."""
 
 from __future__ import annotations
 
-import os
 from typing import TYPE_CHECKING, Any
 
 from hypothesis import HealthCheck, Phase, Verbosity, given, settings
@@ -41,10 +31,6 @@ if TYPE_CHECKING:
 
     from ._scenario import Scenario
 
-PROFILES = ("ci", "dev", "long")
-DEFAULT_PROFILE = "ci"
-"""Deterministic unless asked otherwise: a test suite gives the same verdict at every run."""
-ENVIRONMENT = "PYROBOTS_AIO_EXPLORE"
 LONG_FACTOR = 10
 """The ``long`` profile's examples, per example asked for."""
 
@@ -118,19 +104,6 @@ def schedules(scenario: Scenario[Any]) -> SearchStrategy[list[Hit]]:
     what = disturbances(scenario.disturbances, scenario.boundaries)
     hit = st.builds(Hit, what, st.one_of(whens))
     return st.lists(hit, max_size=scenario.max_hits)
-
-
-def chosen_profile(profile: str | None) -> str:
-    """``profile``, else the environment's, else `DEFAULT_PROFILE`.
-
-    Raises:
-        ValueError: Not one of `PROFILES`.
-    """
-    name = profile or os.environ.get(ENVIRONMENT) or DEFAULT_PROFILE
-    if name not in PROFILES:
-        msg = f"the explore profile must be one of {list(PROFILES)}, got {name!r}"
-        raise ValueError(msg)
-    return name
 
 
 def _settings(examples: int, profile: str) -> settings:
