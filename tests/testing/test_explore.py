@@ -9,6 +9,9 @@ it to that one bump, and print code that, run, fails the same way.
 from __future__ import annotations
 
 import contextlib
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -111,4 +114,63 @@ def test_the_fixed_walk_replays_clean() -> None:
         [],
         None,
         [Hit(Bump(hold=0.5), At(0.0))],
+    )
+
+
+PLANTED = """
+    import contextlib
+    import pytest
+    from pyrobots_aio.testing import FakeBase
+    from pyrobots_aio.testing.explore import Bump, Scenario, no_forward_into_bumper
+
+    async def careless_walk(robot):
+        await robot.undock()  # no reflex at all
+
+    @pytest.mark.explore(examples=30)
+    def test_walk(explore):
+        explore(Scenario(careless_walk, base=FakeBase, disturbances=[Bump], horizon=5.0,
+                         invariants=[no_forward_into_bumper()], name="walk"))
+"""
+
+
+def test_the_fixture_explores_with_the_marker_and_records_into_tmp_path(
+    pytester: pytest.Pytester,
+) -> None:
+    pytester.makeini(
+        "[pytest]\nasyncio_mode = strict\nasyncio_default_fixture_loop_scope = function\n"
+    )
+    pytester.makepyfile(textwrap.dedent(PLANTED))
+    result = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--explore-profile=ci")
+    result.assert_outcomes(failed=1)
+    result.stdout.fnmatch_lines(
+        [
+            "E * walk broke its invariants under 1 hit(s):",
+            "E * walk.replay([",
+            "E *     Hit(Bump(hold=0.5), At(0.0)),",
+            "E * recording: */test_walk0/walk.jsonl",
+            "E * replay page: */test_walk0/walk.html",
+        ]
+    )
+
+
+def test_a_bad_profile_is_refused_by_name() -> None:
+    with pytest.raises(ValueError, match=r"^the explore profile must be one of \['ci', 'dev', "):
+        careless().explore(examples=1, profile="fast")
+
+
+def test_without_hypothesis_explore_says_which_extra_to_install() -> None:
+    code = (
+        "import sys; sys.modules['hypothesis'] = None\n"
+        "import pyrobots_aio.testing\n"  # the rest of the testing package needs no Hypothesis
+        "try:\n"
+        "    import pyrobots_aio.testing.explore\n"
+        "except ImportError as missing:\n"
+        "    print(type(missing).__name__, missing)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert done.stdout == (
+        "ExploreUnavailableError pyrobots_aio.testing.explore needs Hypothesis: "
+        'pip install "pyrobots-aio[explore]" (or pip install -e ".[explore]" in a checkout)\n'
     )
