@@ -8,7 +8,7 @@ examples of short walks); ``PYROBOTS_AIO_EXPLORE=long`` searches longer.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import pytest
 
@@ -18,29 +18,66 @@ from pyrobots_aio.testing.explore import (
     SAFETY,
     At,
     Bump,
+    Cancel,
+    Cliff,
+    EmergencyStop,
     Hit,
     On,
+    Pause,
+    Preempt,
+    Reading,
     Scenario,
     completes,
     ends_docked,
 )
 
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from pyrobots_aio.testing.explore import Disturbance, Invariant
+
 MOTIONS = ("undock", "drive_distance", "rotate_angle", "navigate_to", "dock")
 
 
-def walk(on_bump: Literal["cancel", "suspend"], moves: int = 3) -> Scenario[FakeBase]:
+HANDLED: list[type[Disturbance]] = [Bump, Cliff, Reading, Pause, Preempt]
+"""What the walk must get through and still dock."""
+STOPPING: list[type[Disturbance]] = [Bump, Cancel, EmergencyStop, Preempt, Pause]
+"""What may end the walk early; it must stay safe."""
+
+
+def walk(
+    on_bump: Literal["cancel", "suspend"],
+    disturbances: Sequence[type[Disturbance]] = (Bump,),
+    invariants: Sequence[Invariant] = (completes(), ends_docked(), *SAFETY),
+) -> Scenario[FakeBase]:
     async def behaviour(robot: FakeBase) -> WalkReport:
-        return await random_walk(robot, moves=moves, seed=0, on_bump=on_bump)
+        return await random_walk(robot, moves=3, seed=0, on_bump=on_bump)
 
     return Scenario(
         behaviour,
         base=FakeBase,
-        disturbances=[Bump],
+        disturbances=disturbances,
         boundaries=MOTIONS,
-        invariants=[completes(), ends_docked(), *SAFETY],
+        invariants=invariants,
         horizon=30.0,
         name="walk",
     )
+
+
+@pytest.mark.explore(examples=8)
+@pytest.mark.parametrize("on_bump", ["cancel", "suspend"])
+def test_the_walk_gets_through_what_it_handles_and_docks(
+    explore: Callable[[Scenario[FakeBase]], None], on_bump: Literal["cancel", "suspend"]
+) -> None:
+    explore(walk(on_bump, HANDLED))
+
+
+@pytest.mark.explore(examples=8)
+@pytest.mark.parametrize("on_bump", ["cancel", "suspend"])
+def test_the_walk_stays_safe_when_stopped_cancelled_or_preempted(
+    explore: Callable[[Scenario[FakeBase]], None], on_bump: Literal["cancel", "suspend"]
+) -> None:
+    explore(walk(on_bump, STOPPING, SAFETY))
 
 
 @pytest.mark.parametrize("on_bump", ["cancel", "suspend"])
