@@ -23,6 +23,7 @@ PUBLIC = [
     "pyrobots_aio.supervision",
     "pyrobots_aio.telemetry",
     "pyrobots_aio.testing",
+    "pyrobots_aio.testing.explore",
 ]
 
 

@@ -42,6 +42,17 @@ class Scenario(Generic[R]):
         max_hits: The most hits in one schedule.
         max_nth: Hits at boundaries are drawn up to the ``max_nth`` action of a name.
         name: The variable the printed replay code calls the scenario.
+
+    Example:
+        >>> from pyrobots_aio.testing import FakeBase
+        >>> from pyrobots_aio.testing.explore import On
+        >>> async def out_and_back(robot: FakeBase) -> None:
+        ...     await robot.undock()
+        ...     await robot.dock()
+        >>> scenario = Scenario(out_and_back, base=FakeBase, boundaries=["undock"])
+        >>> run = scenario.replay([Hit(Bump(), On("undock", at="end"))])
+        >>> run.violations, run.docked, [(round(t, 2), hit) for t, hit in run.hits]
+        ([], True, [(2.36, Hit(Bump(), On('undock', at='end')))])
     """
 
     def __init__(
