@@ -48,7 +48,8 @@ class completes(Invariant):
 
     def after(self, run: Run[Any]) -> None:
         """The behaviour returned."""
-        assert run.error is None, f"the behaviour raised {run.error!r}"
+        if run.error is not None:
+            raise AssertionError(f"the behaviour raised {run.error!r}")
 
 
 class ends_docked(Invariant):
@@ -56,10 +57,50 @@ class ends_docked(Invariant):
 
     def after(self, run: Run[Any]) -> None:
         """The robot is docked."""
-        assert run.docked, "the robot did not end on its dock"
+        if not run.docked:
+            raise AssertionError("the robot did not end on its dock")
 
 
-class no_forward_into_bumper(Invariant):
+class _WhileHeld(Invariant):
+    """An invariant on what may happen once a condition has held for ``grace`` seconds."""
+
+    KEYS: tuple[str, ...] = ()
+    """The state keys whose writes it looks at."""
+
+    def __init__(self, grace: float) -> None:
+        self.grace = grace
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(grace={self.grace!r})"
+
+    def holds(self, robot: Robot) -> bool:
+        """Whether the condition holds now."""
+        raise NotImplementedError
+
+    def breach(self, robot: Robot, now: float, since: float) -> str | None:
+        """What broke, the condition holding since ``since`` (past the grace), or None."""
+        raise NotImplementedError
+
+    def watch(self, robot: Robot, fail: Callable[[str], None]) -> None:
+        """Look at every write of `KEYS`: how long the condition has held, and what happens."""
+        since: list[float | None] = [None]
+
+        def check(_: Mapping[str, Any]) -> None:
+            now = robot.time()
+            if not self.holds(robot):
+                since[0] = None
+                return
+            start = since[0] = now if since[0] is None else since[0]
+            # ticks land on sums of floats: a press of exactly the grace is not longer than it
+            held = now - start > self.grace + 1e-9
+            why = self.breach(robot, now, start) if held else None
+            if why is not None:
+                fail(why)
+
+        robot.state.subscribe(check, self.KEYS)
+
+
+class no_forward_into_bumper(_WhileHeld):
     """The base never drives forward while a front bumper has been pressed longer than ``grace``.
 
     Args:
@@ -67,59 +108,47 @@ class no_forward_into_bumper(Invariant):
             (a reflex needs a tick or two to take the wheels).
     """
 
+    KEYS = ("bumper_left", "bumper_right", "v")
+
     def __init__(self, grace: float = 0.2) -> None:
-        self.grace = grace
+        super().__init__(grace)
 
-    def __repr__(self) -> str:
-        return f"no_forward_into_bumper(grace={self.grace!r})"
+    def holds(self, robot: Robot) -> bool:
+        """A front bumper is pressed."""
+        return bool(robot.state.get("bumper_left") or robot.state.get("bumper_right"))
 
-    def watch(self, robot: Robot, fail: Callable[[str], None]) -> None:
-        """Watch the bumper and the commanded speed at every write."""
-        since: list[float | None] = [None]
-
-        def check(_: Mapping[str, Any]) -> None:
-            state, now = robot.state, robot.time()
-            if not (state.get("bumper_left") or state.get("bumper_right")):
-                since[0] = None
-                return
-            pressed = since[0] = now if since[0] is None else since[0]
-            v = state.get("v") or 0.0
-            if v > 0 and now - pressed > self.grace:
-                fail(
-                    f"at t={now:.3f} the base drove forward (v={v:.3f} m/s) with the front "
-                    f"bumper pressed since t={pressed:.3f} (more than {self.grace} s)"
-                )
-
-        robot.state.subscribe(check, ("bumper_left", "bumper_right", "v"))
+    def breach(self, robot: Robot, now: float, since: float) -> str | None:
+        """The base drives forward."""
+        v = robot.state.get("v") or 0.0
+        if v <= 0:
+            return None
+        return (
+            f"at t={now:.3f} the base drove forward (v={v:.3f} m/s) with the front "
+            f"bumper pressed since t={since:.3f} (more than {self.grace} s)"
+        )
 
 
-class still_while_stopped(Invariant):
+class still_while_stopped(_WhileHeld):
     """Once the emergency stop has been latched ``grace`` seconds, the wheels stay still."""
 
+    KEYS = ("v", "w")
+
     def __init__(self, grace: float = 0.05) -> None:
-        self.grace = grace
+        super().__init__(grace)
 
-    def __repr__(self) -> str:
-        return f"still_while_stopped(grace={self.grace!r})"
+    def holds(self, robot: Robot) -> bool:
+        """The emergency stop is latched."""
+        return robot.emergency_stopped
 
-    def watch(self, robot: Robot, fail: Callable[[str], None]) -> None:
-        """Watch the commanded speeds while the stop is latched."""
-        since: list[float | None] = [None]
-
-        def check(_: Mapping[str, Any]) -> None:
-            now = robot.time()
-            if not robot.emergency_stopped:
-                since[0] = None
-                return
-            latched = since[0] = now if since[0] is None else since[0]
-            v, w = robot.state.get("v") or 0.0, robot.state.get("w") or 0.0
-            if (v or w) and now - latched > self.grace:
-                fail(
-                    f"at t={now:.3f} the wheels turned (v={v:.3f}, w={w:.3f}) under the "
-                    f"emergency stop latched since t={latched:.3f}"
-                )
-
-        robot.state.subscribe(check, ("v", "w"))
+    def breach(self, robot: Robot, now: float, since: float) -> str | None:
+        """The wheels turn."""
+        v, w = robot.state.get("v") or 0.0, robot.state.get("w") or 0.0
+        if not (v or w):
+            return None
+        return (
+            f"at t={now:.3f} the wheels turned (v={v:.3f}, w={w:.3f}) under the "
+            f"emergency stop latched since t={since:.3f}"
+        )
 
 
 class no_action_outlives_robot(Invariant):
@@ -134,9 +163,12 @@ class no_action_outlives_robot(Invariant):
             for e in events.of_kind(ActionSpawned)
             if e.action not in finished
         ]
-        assert not alive, f"actions outlived the robot: {alive}"
+        if alive:
+            raise AssertionError(f"actions outlived the robot: {alive}")
         abandoned = [f"{e.name} #{e.action}" for e in events.of_kind(ActionAbandonment)]
-        assert not abandoned, f"actions ignored their cancellation and were abandoned: {abandoned}"
+        if abandoned:
+            msg = f"actions ignored their cancellation and were abandoned: {abandoned}"
+            raise AssertionError(msg)
 
 
 class no_resource_held_twice(Invariant):
