@@ -12,6 +12,7 @@ import contextlib
 import subprocess
 import sys
 import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -24,8 +25,10 @@ from pyrobots_aio.testing import FakeBase
 from pyrobots_aio.testing.explore import (
     At,
     Bump,
+    Disturbance,
     Hit,
     Scenario,
+    Target,
     completes,
     no_forward_into_bumper,
 )
@@ -174,3 +177,26 @@ def test_without_hypothesis_explore_says_which_extra_to_install() -> None:
         "ExploreUnavailableError pyrobots_aio.testing.explore needs Hypothesis: "
         'pip install "pyrobots-aio[explore]" (or pip install -e ".[explore]" in a checkout)\n'
     )
+
+
+def test_workers_split_the_search_and_find_the_same_bug_every_time() -> None:
+    found = []
+    for _ in range(2):
+        with pytest.raises(InvariantViolation) as failure:
+            careless().explore(examples=100, workers=2)
+        found.append(failure.value.schedule)
+    assert found[0] == found[1]
+    assert len(found[0]) == 1
+
+
+@dataclass(frozen=True, slots=True, repr=False)
+class Broken(Disturbance):
+    def apply(self, target: Target) -> None:
+        raise ValueError("this disturbance cannot be applied")
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_disturbance_that_raises_is_raised_not_taken_for_a_violation(workers: int) -> None:
+    scenario = Scenario(armed_walk, base=FakeBase, disturbances=[Broken()], horizon=1.0)
+    with pytest.raises(ValueError, match=r"^this disturbance cannot be applied$"):
+        scenario.explore(examples=5, workers=workers)

@@ -26,17 +26,19 @@ def explore(request: pytest.FixtureRequest, tmp_path: Path) -> Callable[[Scenari
     """``explore(scenario)``: `Scenario.explore` with this test's examples, profile and tmp_path.
 
     Examples come from ``@pytest.mark.explore(examples=N)`` (default
-    `EXAMPLES`); the profile from ``--explore-profile``, else the
-    ``PYROBOTS_AIO_EXPLORE`` environment variable, else ``ci``; a failing
-    run's recording and replay page go to the test's ``tmp_path``.
+    `EXAMPLES`), processes from its ``workers=N`` (default 1); the profile
+    from ``--explore-profile``, else the ``PYROBOTS_AIO_EXPLORE`` environment
+    variable, else ``ci``; a failing run's recording and replay page go to
+    the test's ``tmp_path``.
     """
     from . import explore as _explore  # noqa: F401 (an error naming the extra, if missing)
 
     marker = request.node.get_closest_marker("explore")
-    examples = int(marker.kwargs.get("examples", EXAMPLES)) if marker else EXAMPLES
+    given = marker.kwargs if marker else {}
+    examples, workers = int(given.get("examples", EXAMPLES)), int(given.get("workers", 1))
     profile: str | None = request.config.getoption("explore_profile")
 
     def run(scenario: Scenario[Any]) -> None:
-        scenario.explore(examples=examples, profile=profile, record_dir=tmp_path)
+        scenario.explore(examples=examples, profile=profile, record_dir=tmp_path, workers=workers)
 
     return run

@@ -5,7 +5,8 @@ Markers:
         ``asyncio.sleep(3600)`` returns at once with ``loop.time()`` 3600 s later
         (the test is run by pytest-asyncio: ``@pytest.mark.asyncio``).
     allow_leaks: the leak checks below are skipped for this test.
-    explore(examples=N): the ``explore`` fixture tries N schedules (default 100).
+    explore(examples=N, workers=W): the ``explore`` fixture tries N schedules
+        (default 100) in W processes (default 1).
 
 Fixtures:
     robot: a running dummy ``Robot(dummy=True)`` with an `EventLog` attached.
@@ -76,7 +77,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(_explore_fixture, "pyrobots_aio.explore")
     config.addinivalue_line(
-        "markers", "explore(examples=N): the explore fixture tries N schedules (default 100)."
+        "markers",
+        "explore(examples=N, workers=W): the explore fixture tries N schedules (default 100) "
+        "in W processes (default 1).",
     )
     config.addinivalue_line(
         "markers", "allow_leaks: this test may leave asyncio tasks behind (not checked)."

@@ -13,6 +13,7 @@ from ._invariants import SAFETY, completes
 from ._run import R, Run, Runner
 from ._schedule import Bump, Hit
 from ._search import search
+from ._workers import search_in_processes
 
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable, Sequence
@@ -102,6 +103,7 @@ class Scenario(Generic[R]):
         examples: int = 100,
         profile: str | None = None,
         record_dir: str | Path | None = None,
+        workers: int = 1,
     ) -> None:
         """Search for a schedule that breaks an invariant; fail with the smallest found.
 
@@ -110,12 +112,18 @@ class Scenario(Generic[R]):
             profile: ``"ci"``, ``"dev"`` or ``"long"`` (see `pyrobots_aio.testing.explore`).
             record_dir: Where the failing run's recording and replay page go
                 (default: a new temporary directory).
+            workers: Processes to search in (forked; each takes its share of
+                the examples with a seed of its own, and the first one's find wins).
 
         Raises:
             InvariantViolation: The shrunk schedule, printed as code that replays it,
                 what broke, and the paths of the recording and its replay page.
         """
-        found = search(self, self._fails, examples, chosen_profile(profile))
+        chosen = chosen_profile(profile)
+        if workers > 1:
+            found = search_in_processes(self, self._fails, examples, chosen, workers)
+        else:
+            found = search(self, self._fails, examples, chosen)
         if found is None:
             return
         where = Path(record_dir or tempfile.mkdtemp(prefix="pyrobots_aio-explore-"))

@@ -25,15 +25,12 @@ PREEMPT_PRIORITY = 1000
 
 
 def _code(value: Any) -> str:
-    """``value`` as the code that builds it: a dataclass's first field, then those not default."""
-    first, *rest = fields(value)
-    shown = (
-        [repr(getattr(value, first.name))] if getattr(value, first.name) != first.default else []
-    )
-    shown += [
-        f"{f.name}={getattr(value, f.name)!r}" for f in rest if getattr(value, f.name) != f.default
-    ]
-    return f"{type(value).__name__}({', '.join(shown)})"
+    """``value`` as the code that builds it: its first field, then by keyword, defaults unsaid."""
+    given = [(f, getattr(value, f.name)) for f in fields(value)]
+    said = [(f, v) for f, v in given if v != f.default]
+    first = [repr(v) for f, v in said[:1] if f is given[0][0]]
+    keywords = [f"{f.name}={v!r}" for f, v in said[len(first) :]]
+    return f"{type(value).__name__}({', '.join(first + keywords)})"
 
 
 # -- when -------------------------------------------------------------------------------------

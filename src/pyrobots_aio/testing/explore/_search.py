@@ -129,9 +129,16 @@ class _Found(Exception):
 
 
 def search(
-    scenario: Scenario[Any], fails: Callable[[list[Hit]], bool], examples: int, profile: str
+    scenario: Scenario[Any],
+    fails: Callable[[list[Hit]], bool],
+    examples: int,
+    profile: str,
+    salt: str = "",
 ) -> list[Hit] | None:
-    """The smallest schedule for which ``fails`` is true, or None if no example failed."""
+    """The smallest schedule for which ``fails`` is true, or None if no example failed.
+
+    ``salt`` sets a search apart from others of the same scenario (another seed, in ``ci``).
+    """
 
     def check(schedule: list[Hit]) -> None:
         if fails(schedule):
@@ -139,7 +146,7 @@ def search(
 
     # Hypothesis keys its seed (ci) and its saved examples (dev) on the test function's
     # source, which is this same function for every scenario: the scenario's key tells them apart
-    check._hypothesis_internal_add_digest = scenario.key.encode()  # type: ignore[attr-defined]
+    check._hypothesis_internal_add_digest = (scenario.key + salt).encode()  # type: ignore[attr-defined]
     test = settings(_settings(examples, profile))(given(schedules(scenario))(check))
     try:
         test()
