@@ -79,8 +79,8 @@ def careless(
 
 FOUND = """\
 walk broke its invariants under 1 hit(s):
-  - at t=0.220 the base drove forward (v=0.200 m/s) with the front bumper pressed since t=0.000 \
-(more than 0.2 s)
+  - at t=0.220 the base was commanded forward (v=0.200 m/s) with the front bumper pressed \
+since t=0.000 (more than 0.2 s)
 replay it in a test:
 
 from pyrobots_aio.testing.explore import At, Bump, Hit

@@ -34,7 +34,7 @@ async def _drive_on(robot: FakeBase) -> None:
 def test_driving_on_into_a_held_bump_breaks_no_forward_into_bumper() -> None:
     assert _violations(_drive_on, no_forward_into_bumper(), Hit(Bump(), At(0.5))) == []
     assert _violations(_drive_on, no_forward_into_bumper(), Hit(Bump(hold=1.0), At(0.5))) == [
-        "at t=0.720 the base drove forward (v=0.100 m/s) with the front bumper pressed "
+        "at t=0.720 the base was commanded forward (v=0.100 m/s) with the front bumper pressed "
         "since t=0.500 (more than 0.2 s)"
     ]
 
@@ -48,7 +48,7 @@ def test_wheels_driven_under_the_emergency_stop_break_still_while_stopped() -> N
     stop = Hit(EmergencyStop(clear_after=None), At(0.5))
     assert _violations(_drive_on, still_while_stopped(), stop) == []
     assert _violations(rogue, still_while_stopped(), stop) == [
-        "at t=1.020 the wheels turned (v=0.100, w=0.000) under the emergency stop "
+        "at t=1.020 the wheels were commanded (v=0.100, w=0.000) under the emergency stop "
         "latched since t=0.500"
     ]
 

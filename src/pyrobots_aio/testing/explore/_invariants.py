@@ -61,6 +61,18 @@ class ends_docked(Invariant):
             raise AssertionError("the robot did not end on its dock")
 
 
+def commanded(robot: Robot) -> tuple[float, float]:
+    """The wheels' command ``(v, w)``: a simulated world's (FakeBase, SimRobot), else the state's.
+
+    A simulated base's state has the odometry's speeds, which lag the command
+    (and read zero against a wall); its world has what the wheels are told.
+    """
+    command = getattr(getattr(robot, "world", None), "command", None)
+    if isinstance(command, tuple):
+        return command
+    return robot.state.get("v") or 0.0, robot.state.get("w") or 0.0
+
+
 class _WhileHeld(Invariant):
     """An invariant on what may happen once a condition has held for ``grace`` seconds."""
 
@@ -119,11 +131,11 @@ class no_forward_into_bumper(_WhileHeld):
 
     def breach(self, robot: Robot, now: float, since: float) -> str | None:
         """The base drives forward."""
-        v = robot.state.get("v") or 0.0
+        v, _ = commanded(robot)
         if v <= 0:
             return None
         return (
-            f"at t={now:.3f} the base drove forward (v={v:.3f} m/s) with the front "
+            f"at t={now:.3f} the base was commanded forward (v={v:.3f} m/s) with the front "
             f"bumper pressed since t={since:.3f} (more than {self.grace} s)"
         )
 
@@ -142,11 +154,11 @@ class still_while_stopped(_WhileHeld):
 
     def breach(self, robot: Robot, now: float, since: float) -> str | None:
         """The wheels turn."""
-        v, w = robot.state.get("v") or 0.0, robot.state.get("w") or 0.0
+        v, w = commanded(robot)
         if not (v or w):
             return None
         return (
-            f"at t={now:.3f} the wheels turned (v={v:.3f}, w={w:.3f}) under the "
+            f"at t={now:.3f} the wheels were commanded (v={v:.3f}, w={w:.3f}) under the "
             f"emergency stop latched since t={since:.3f}"
         )
 
