@@ -9,6 +9,7 @@ it to that one bump, and print code that, run, fails the same way.
 from __future__ import annotations
 
 import contextlib
+import re
 import subprocess
 import sys
 import textwrap
@@ -98,8 +99,10 @@ def test_the_unarmed_undock_is_found_and_shrunk_to_one_bump(tmp_path: Path) -> N
     assert found.value.schedule == (Hit(Bump(hold=0.5), At(0.0)),)  # as it leaves the dock
     recording, page = tmp_path / "walk.jsonl", tmp_path / "walk.html"
     assert message.endswith(f"\nrecording: {recording}\nreplay page: {page}")
-    assert "disturbance" in load(recording).samples  # the page marks the hit where it came
-    assert page.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
+    assert load(recording).samples["disturbance"].values == ["Bump(hold=0.5)"]
+    html = page.read_text(encoding="utf-8")  # its map marks the hit where the robot was
+    assert re.search(r'<path class="mark disturbance" transform="translate\([\d.]+,[\d.]+\)"', html)
+    assert "<title>disturbance: Bump(hold=0.5) at 0.000 s</title>" in html
 
 
 def test_the_printed_code_replays_the_failure() -> None:
@@ -122,6 +125,7 @@ def test_the_fixed_walk_replays_clean() -> None:
 
 PLANTED = """
     import contextlib
+import re
     import pytest
     from pyrobots_aio.testing import FakeBase
     from pyrobots_aio.testing.explore import Bump, Scenario, no_forward_into_bumper

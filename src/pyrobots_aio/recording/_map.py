@@ -3,11 +3,13 @@
 Drawn from the recording alone: the arena from the header's floor plan (the
 MuJoCo model's static geoms, recorded by a simulated robot's recorder), to
 scale with a scale bar; the path from the recorded poses, coloured by time
-(`_svg.ramp`); marks for bumps, cliffs, preemptions, undocking and docking at
-the pose of their moment. Everything is in pixels: ``data-ox``, ``data-oy``
-and ``data-scale`` on the ``svg.map`` give the map frame back
-(``x = (px - ox) / scale``, ``y = (oy - py) / scale``), and ``data-track``
-holds the path as ``t,x,y`` triples for the page's hover script.
+(`_svg.ramp`); marks for bumps, cliffs, preemptions, undocking, docking and
+the disturbances an exploration dealt (the ``disturbance`` state key that
+`pyrobots_aio.testing.explore` writes at each hit) at the pose of their moment.
+Everything is in pixels: ``data-ox``, ``data-oy`` and ``data-scale`` on the
+``svg.map`` give the map frame back (``x = (px - ox) / scale``, ``y = (oy -
+py) / scale``), and ``data-track`` holds the path as ``t,x,y`` triples for the
+page's hover script.
 
 Coordinates are drawn within `REACH` of the origin: a pose beyond (a
 simulation that blew up, a crafted file) is drawn at that distance, and a
@@ -191,7 +193,7 @@ def _rising(times: Sequence[float], values: Sequence[object]) -> Iterable[tuple[
 
 
 def marks(recording: Recording, found: Analysis) -> list[Mark]:
-    """Bumps, cliffs, preemptions, undocking and docking, in time order."""
+    """Bumps, cliffs, preemptions, undocking, docking and disturbances, in time order."""
     found_marks: list[Mark] = []
     bumper = recording.samples.get("bumper")
     if bumper is not None:
@@ -212,6 +214,12 @@ def marks(recording: Recording, found: Analysis) -> list[Mark]:
         found_marks += [
             Mark("dock" if v else "undock", t, "docked" if v else "undocked")
             for t, v in _rising(docked.times, docked.values)
+        ]
+    dealt = recording.samples.get("disturbance")
+    if dealt is not None:
+        found_marks += [
+            Mark("disturbance", t, f"disturbance: {v}")
+            for t, v in zip(dealt.times, dealt.values, strict=True)
         ]
     for event in found.preemptions:
         victim = found.label(event.action) or "?"
@@ -244,6 +252,7 @@ _SYMBOLS = {
     "preempt": "M-5,-7 h10 l-5,8 z",
     "dock": "M-5,-5 h10 v10 h-10 z",
     "undock": "M-5,-5 h10 v10 h-10 z",
+    "disturbance": "M0,-8 L8,0 L0,8 L-8,0 Z",
 }
 
 
