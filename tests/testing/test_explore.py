@@ -204,3 +204,38 @@ def test_a_disturbance_that_raises_is_raised_not_taken_for_a_violation(workers: 
     scenario = Scenario(armed_walk, base=FakeBase, disturbances=[Broken()], horizon=1.0)
     with pytest.raises(ValueError, match=r"^this disturbance cannot be applied$"):
         scenario.explore(examples=5, workers=workers)
+
+
+COUNTED = """
+import sys
+sys.path.insert(0, {tests!r})
+from test_explore import careless
+from pyrobots_aio import InvariantViolation
+
+scenario = careless()
+runs = []
+fails = scenario._fails
+scenario._fails = lambda schedule: runs.append(schedule) or fails(schedule)
+try:
+    scenario.explore(examples=100, profile="dev")
+except InvariantViolation as found:
+    print(len(runs), found.schedule)
+"""
+
+
+def test_under_dev_a_failure_is_kept_and_tried_first_at_the_next_run(tmp_path: Path) -> None:
+    script = tmp_path / "count.py"
+    script.write_text(COUNTED.format(tests=str(Path(__file__).parent)))
+
+    def explore() -> tuple[int, str]:
+        done = subprocess.run(
+            [sys.executable, str(script)],
+            capture_output=True, text=True, check=True, timeout=300, cwd=tmp_path,
+        )  # fmt: skip
+        runs, schedule = done.stdout.split(" ", 1)
+        return int(runs), schedule
+
+    first, again = explore(), explore()
+    assert (tmp_path / ".hypothesis" / "examples").is_dir()
+    assert again[1] == first[1]
+    assert again[0] < first[0]  # the saved example first, then a shorter shrink
