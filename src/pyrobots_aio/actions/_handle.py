@@ -111,7 +111,7 @@ class Host(Protocol):
 class ActionHandle(Generic[T]):
     """A started action: await it for its result, cancel it, inspect it.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Outcome, Robot, action
         >>> @action
@@ -511,7 +511,7 @@ class ActionHandle(Generic[T]):
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(handle.pause, reason)``).
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot, action
             >>> @action

@@ -87,7 +87,7 @@ class EmergencyStop:
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(robot.emergency_stop, reason)``).
 
-        Example:
+        Examples:
             >>> from pyrobots_aio import ActionInterrupted, Resource, Robot, action, lock
             >>> from pyrobots_aio.sim import run
             >>> @action

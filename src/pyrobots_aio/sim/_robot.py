@@ -48,7 +48,7 @@ class SimRobot(DriveBase):
         **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions``,
             ``instruments`` ...).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import SimRobot, run
         >>> async def main() -> bool:
         ...     async with SimRobot() as robot:

@@ -152,7 +152,7 @@ class FakeWorld:
             cable caught in them): the robot and its odometry stay put. A
             test sets it to see a motion stall anywhere, turning included.
 
-    Example:
+    Examples:
         >>> world = FakeWorld()
         >>> world.set_command(0.2, 0.0)
         >>> world.step(1.0)
@@ -391,7 +391,7 @@ class FakeBase(DriveBase):
         sensors: Its sensors (default: the standard robot's, `pyrobots_aio.motion.SENSORS`).
         **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions`` ...).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import run
         >>> from pyrobots_aio.sim.random_walk import random_walk
         >>> async def main() -> tuple[int, bool]:
