@@ -124,8 +124,6 @@ def test_the_fixed_walk_replays_clean() -> None:
 
 
 PLANTED = """
-    import contextlib
-import re
     import pytest
     from pyrobots_aio.testing import FakeBase
     from pyrobots_aio.testing.explore import Bump, Scenario, no_forward_into_bumper
