@@ -33,6 +33,9 @@ PyRobotsError
 ├── StateMachineError             a StateMachine refused when built (unknown state, bad trigger)
 ├── RecordingError
 │   └── CorruptRecordingError     a recording line that cannot be read (.line)
+├── ExplorationError              pyrobots_aio.testing.explore
+│   ├── ExploreUnavailableError   Hypothesis is not installed (also an ImportError)
+│   └── InvariantViolation        a run broke its invariants (also an AssertionError; .schedule)
 └── Ros2Error
     ├── Ros2UnavailableError      rclpy is not installed (also an ImportError)
     ├── Ros2NameError             a name ROS 2 rejects, with its reason (also a ValueError)
@@ -352,6 +355,36 @@ class CorruptRecordingError(RecordingError):
         self.path = path
         self.line = line
         super().__init__(f"{path}:{line}: {problem}")
+
+
+class ExplorationError(PyRobotsError):
+    """Errors of scenario exploration (`pyrobots_aio.testing.explore`)."""
+
+
+class ExploreUnavailableError(ExplorationError, ImportError):
+    """Hypothesis cannot be imported; install the ``explore`` extra."""
+
+
+class InvariantViolation(ExplorationError, AssertionError):
+    """A run broke its invariants: the schedule that did it, as code, and what broke.
+
+    Attributes:
+        schedule: The hits (shrunk, when found by exploring).
+        violations: What broke, in words.
+        recording: The run's recording (JSON Lines), when one was made.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        schedule: Sequence[object],
+        violations: Sequence[str],
+        recording: str | None = None,
+    ) -> None:
+        self.schedule = tuple(schedule)
+        self.violations = tuple(violations)
+        self.recording = recording
+        super().__init__(message)
 
 
 class Ros2Error(PyRobotsError):

@@ -4,10 +4,12 @@ Drawn from the recording alone: the arena from the header's floor plan (the
 MuJoCo model's static geoms, recorded by a simulated robot's recorder), to
 scale with a scale bar; the path from the recorded poses, coloured by time
 (`_svg.ramp`), with arrows along it for the robot's heading; marks for bumps,
-cliffs, preemptions, undocking and docking at the pose of their moment. Marks
-of one kind closer than `CLUSTER_PX` are drawn once with their count (a robot
-bumps into the same corner again and again), and the kinds sit a little apart,
-so that none hides another. Everything is in pixels: ``data-ox``, ``data-oy``
+cliffs, preemptions, undocking, docking and the disturbances an exploration
+dealt (the ``disturbance`` state key that `pyrobots_aio.testing.explore` writes
+at each hit) at the pose of their moment. Marks of one kind closer than
+`CLUSTER_PX` are drawn once with their count (a robot bumps into the same
+corner again and again), and the kinds sit a little apart, so that none hides
+another. Everything is in pixels: ``data-ox``, ``data-oy``
 and ``data-scale`` on the ``svg.map`` give the map frame back
 (``x = (px - ox) / scale``, ``y = (oy - py) / scale``), and ``data-track``
 holds the path as ``t,x,y,yaw`` quadruples for the page's hover script, which
@@ -206,7 +208,7 @@ def _rising(times: Sequence[float], values: Sequence[object]) -> Iterable[tuple[
 
 
 def marks(recording: Recording, found: Analysis) -> list[Mark]:
-    """Bumps, cliffs, preemptions, undocking and docking, in time order."""
+    """Bumps, cliffs, preemptions, undocking, docking and disturbances, in time order."""
     found_marks: list[Mark] = []
     bumper = recording.samples.get("bumper")
     if bumper is not None:
@@ -227,6 +229,12 @@ def marks(recording: Recording, found: Analysis) -> list[Mark]:
         found_marks += [
             Mark("dock" if v else "undock", t, "docked" if v else "undocked")
             for t, v in _rising(docked.times, docked.values)
+        ]
+    dealt = recording.samples.get("disturbance")
+    if dealt is not None:
+        found_marks += [
+            Mark("disturbance", t, f"disturbance: {v}")
+            for t, v in zip(dealt.times, dealt.values, strict=True)
         ]
     for event in found.preemptions:
         victim = found.label(event.action) or "?"
@@ -259,8 +267,16 @@ _SYMBOLS = {
     "preempt": "M-5,-7 h10 l-5,8 z",
     "dock": "M-5,-5 h10 v10 h-10 z",
     "undock": "M-5,-5 h10 v10 h-10 z",
+    "disturbance": "M0,-8 L8,0 L0,8 L-8,0 Z",
 }
-_OFFSETS = {"bump": (0, 0), "cliff": (-9, 9), "preempt": (9, -9), "dock": (0, 0), "undock": (9, 9)}
+_OFFSETS = {
+    "bump": (0, 0),
+    "cliff": (-9, 9),
+    "preempt": (9, -9),
+    "dock": (0, 0),
+    "undock": (9, 9),
+    "disturbance": (-9, -9),
+}
 """Where each kind sits from the robot, in pixels: a preemption at a bump stays in sight."""
 MAX_LISTED = 8
 """Most moments a mark's tooltip lists."""

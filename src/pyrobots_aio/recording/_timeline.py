@@ -86,6 +86,7 @@ svg.map { background: #f5f3ee; border: 1px solid #ddd; }
 .mark.preempt { fill: #000; stroke: #fff; stroke-width: 1; }
 .mark.dock { fill: #2e7d32; stroke: #fff; stroke-width: 1; }
 .mark.undock { fill: #fff; stroke: #2e7d32; }
+.mark.disturbance { fill: none; stroke: #6a1b9a; stroke-width: 2; }
 .start { fill: #fff; stroke: #000; } .here { fill: none; stroke: #d50000; stroke-width: 3; }
 .scalebar line { stroke: #000; stroke-width: 2; }
 .legend span { display: inline-block; margin-right: 14px; }
