@@ -1,16 +1,15 @@
 from __future__ import annotations
 
-import re
-import subprocess
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).parent.parent
-README = (ROOT / "README.md").read_text()
+import snippets_support
+from snippets_support import ROOT, run_snippet
+
+README = snippets_support.README.read_text()
 
 
 def blocks(language: str) -> list[str]:
-    return re.findall(rf"```{language}\n(.*?)```", README, flags=re.DOTALL)
+    return snippets_support.blocks(snippets_support.README, language)
 
 
 def test_readme_opens_with_the_two_commands() -> None:
@@ -34,19 +33,6 @@ def test_the_pytest_config_it_gives_is_pytest_asyncio_s() -> None:
 def test_every_python_snippet_runs(tmp_path: Path) -> None:
     snippets = blocks("python")
     assert snippets
-    # a user's project: the pytest config the README gives, and any warning fails the run
-    (tmp_path / "pyproject.toml").write_text(blocks("toml")[0])
-    pytest_run = ["-m", "pytest", "-q", "-p", "no:cacheprovider", "-W", "error"]
     for number, code in enumerate(snippets):
-        script = tmp_path / f"test_snippet_{number}.py"
-        script.write_text(code)
-        runner = pytest_run if "def test_" in code else []
-        done = subprocess.run(
-            [sys.executable, *runner, str(script)],
-            capture_output=True,
-            text=True,
-            timeout=120,
-            check=False,
-            cwd=tmp_path,
-        )
+        done = run_snippet(code, tmp_path, blocks("toml")[0], f"snippet_{number}")
         assert done.returncode == 0, done.stdout + done.stderr

@@ -49,12 +49,15 @@ from ._exceptions import ActionSkipped as ActionSkipped
 from ._exceptions import CorruptRecordingError as CorruptRecordingError
 from ._exceptions import EmergencyStopError as EmergencyStopError
 from ._exceptions import EventLoopError as EventLoopError
+from ._exceptions import ExplorationError as ExplorationError
+from ._exceptions import ExploreUnavailableError as ExploreUnavailableError
 from ._exceptions import GoalError as GoalError
 from ._exceptions import GoalRejectedError as GoalRejectedError
 from ._exceptions import InterfaceBuildError as InterfaceBuildError
 from ._exceptions import InvalidConditionError as InvalidConditionError
 from ._exceptions import InvalidPoseError as InvalidPoseError
 from ._exceptions import InvalidResourceError as InvalidResourceError
+from ._exceptions import InvariantViolation as InvariantViolation
 from ._exceptions import LockstepError as LockstepError
 from ._exceptions import LockUsageError as LockUsageError
 from ._exceptions import ModelLoadError as ModelLoadError
@@ -143,6 +146,8 @@ __all__ = [
     "EventManager",
     "EventMonitor",
     "ExecEvent",
+    "ExplorationError",
+    "ExploreUnavailableError",
     "FrameProvider",
     "FrameTree",
     "GenericRobot",
@@ -154,6 +159,7 @@ __all__ = [
     "InvalidConditionError",
     "InvalidPoseError",
     "InvalidResourceError",
+    "InvariantViolation",
     "LockUsageError",
     "LockstepError",
     "LoopBlocked",

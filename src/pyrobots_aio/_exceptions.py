@@ -33,6 +33,9 @@ PyRobotsError
 ├── StateMachineError             a StateMachine refused when built (unknown state, bad trigger)
 ├── RecordingError
 │   └── CorruptRecordingError     a recording line that cannot be read (.line)
+├── ExplorationError              pyrobots_aio.testing.explore
+│   ├── ExploreUnavailableError   Hypothesis is not installed (also an ImportError)
+│   └── InvariantViolation        a run broke its invariants (also an AssertionError; .schedule)
 └── Ros2Error
     ├── Ros2UnavailableError      rclpy is not installed (also an ImportError)
     ├── Ros2NameError             a name ROS 2 rejects, with its reason (also a ValueError)
@@ -311,7 +314,7 @@ class StallError(MotionError):
     """A motion action commanded motion and its odometry showed no progress: the robot is blocked.
 
     Raised by the motion actions of a `DriveBase` once no progress lasted the
-    base's ``stall_timeout`` (see `pyrobots_aio.motion.StallWatch`); the
+    base's ``stall_timeout`` (by default `pyrobots_aio.motion.STALL_TIMEOUT`); the
     wheels are stopped.
 
     Attributes:
@@ -353,6 +356,36 @@ class CorruptRecordingError(RecordingError):
         self.path = path
         self.line = line
         super().__init__(f"{path}:{line}: {problem}")
+
+
+class ExplorationError(PyRobotsError):
+    """Errors of scenario exploration (`pyrobots_aio.testing.explore`)."""
+
+
+class ExploreUnavailableError(ExplorationError, ImportError):
+    """Hypothesis cannot be imported; install the ``explore`` extra."""
+
+
+class InvariantViolation(ExplorationError, AssertionError):
+    """A run broke its invariants: the schedule that did it, as code, and what broke.
+
+    Attributes:
+        schedule: The hits (shrunk, when found by exploring).
+        violations: What broke, in words.
+        recording: The run's recording (JSON Lines), when one was made.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        schedule: Sequence[object],
+        violations: Sequence[str],
+        recording: str | None = None,
+    ) -> None:
+        self.schedule = tuple(schedule)
+        self.violations = tuple(violations)
+        self.recording = recording
+        super().__init__(message)
 
 
 class Ros2Error(PyRobotsError):

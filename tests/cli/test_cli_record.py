@@ -10,15 +10,18 @@ import signal
 import struct
 import subprocess
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 import websockets
 
 from pyrobots_aio.cli import main
 from pyrobots_aio.recording import load, summarize
+from pyrobots_aio.telemetry import ARENA
+from signal_support import HANG_GUARD, wait_delivered
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
     from pathlib import Path
 
 COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk"]
@@ -74,19 +77,21 @@ def test_the_extension_picks_the_format_and_both_replay_alike(tmp_path: Path) ->
     assert runs["walk.mcap"].header.floor_plan == runs["walk.jsonl"].header.floor_plan
 
 
-async def _watch(port: int) -> dict[str, list[dict[str, object]]]:
-    """Subscribe to the pose and the actions; return what came once both did."""
+async def _watch(
+    port: int, wanted: frozenset[str] = frozenset({"/pyrobots/pose", "/pyrobots/actions"})
+) -> dict[str, list[dict[str, Any]]]:
+    """Subscribe to the ``wanted`` topics; return what came once each did."""
     url = f"ws://127.0.0.1:{port}"
     protocol = websockets.Subprotocol("foxglove.sdk.v1")
-    got: dict[str, list[dict[str, object]]] = {}
+    got: dict[str, list[dict[str, Any]]] = {}
     async with websockets.connect(url, subprotocols=[protocol]) as ws:
         topics: dict[int, str] = {}
-        while not {"/pyrobots/pose", "/pyrobots/actions"} <= set(got):
+        while not wanted <= set(got):
             frame = await ws.recv()
             if isinstance(frame, str):
                 body = json.loads(frame)
                 for channel in body.get("channels", []) if body["op"] == "advertise" else []:
-                    if channel["topic"] in {"/pyrobots/pose", "/pyrobots/actions"}:
+                    if channel["topic"] in wanted:
                         ident = len(topics) + 1
                         topics[ident] = channel["topic"]
                         subscribe = [{"id": ident, "channelId": channel["id"]}]
@@ -95,6 +100,15 @@ async def _watch(port: int) -> dict[str, list[dict[str, object]]]:
                 _, ident, _ = struct.unpack_from("<BIQ", frame)
                 got.setdefault(topics[ident], []).append(json.loads(frame[13:]))
     return got
+
+
+def _port(lines: Iterable[str], pattern: str) -> int:
+    """The port in the first line that matches ``pattern`` (its group 1)."""
+    for line in lines:
+        found = re.search(pattern, line)
+        if found:
+            return int(found.group(1))
+    raise AssertionError(f"no line matched {pattern!r}")
 
 
 def test_serve_streams_the_run_live(tmp_path: Path) -> None:
@@ -106,13 +120,8 @@ def test_serve_streams_the_run_live(tmp_path: Path) -> None:
     ) as demo:
         try:
             assert demo.stderr is not None
-            port = None
-            for line in demo.stderr:  # the console log says where it serves
-                found = re.search(r"live view on ws://127\.0\.0\.1:(\d+)", line)
-                if found:
-                    port = int(found.group(1))
-                    break
-            assert port is not None
+            # the console log says where it serves
+            port = _port(demo.stderr, r"live view on ws://127\.0\.0\.1:(\d+)")
             got = asyncio.run(asyncio.wait_for(_watch(port), 60))  # a hang guard
         finally:
             demo.send_signal(signal.SIGINT)
@@ -123,6 +132,34 @@ def test_serve_streams_the_run_live(tmp_path: Path) -> None:
     assert first["name"] in {"undock", "drive_distance", "move", "rotate_angle"}
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_keep_serving_serves_after_the_walk_until_a_signal(signum: signal.Signals) -> None:
+    # Before: the server stopped with the walk, and a client that came after found nothing.
+    with subprocess.Popen(
+        [*COMMAND, "--serve", "0", "--keep-serving", "--duration", "5"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    ) as demo:
+        try:
+            assert demo.stdout is not None
+            # after the summary, it says it serves on
+            ready = r"^the walk is over; still serving the live view on ws://127\.0\.0\.1:(\d+): "
+            port = _port(demo.stdout, ready + r"Ctrl-C stops$")
+            got = asyncio.run(asyncio.wait_for(_watch(port, frozenset({ARENA})), 60))
+            assert demo.poll() is None  # serving still
+            demo.send_signal(signum)
+            wait_delivered(demo, signum)
+            assert demo.wait(timeout=HANG_GUARD) == 0
+            rest = demo.stdout.read()
+        finally:
+            if demo.poll() is None:
+                demo.kill()
+    assert rest == f"stopped serving ws://127.0.0.1:{port}\n"
+    (scene,) = got[ARENA]  # the walk is over, and a new client still sees the arena
+    assert {e["id"] for e in scene["entities"]} >= {"dock", "wall_north", "pillar"}
+
+
 def _refused(capsys: pytest.CaptureFixture[str], *args: str) -> str:
     """Run the demo in-process with ``args``; it must fail at once: exit 2, one line, no output."""
     assert main(["demo", "random-walk", *args]) == 2
@@ -130,6 +167,15 @@ def _refused(capsys: pytest.CaptureFixture[str], *args: str) -> str:
     assert out == ""  # no progress line: the simulation never started
     assert err.count("\n") == 1
     return err
+
+
+def test_keep_serving_without_serve_is_refused_before_the_run(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert _refused(capsys, "--keep-serving") == (
+        "pyrobots-aio: error: --keep-serving keeps the live view of --serve up: "
+        "add --serve (or --serve PORT)\n"
+    )
 
 
 def test_a_record_path_in_a_missing_directory_is_refused_before_the_run(

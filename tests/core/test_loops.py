@@ -5,11 +5,12 @@ from __future__ import annotations
 import asyncio
 import threading
 import time
+from typing import Any
 
 import pytest
 
 from pyrobots_aio import ActionHandle, EventLoopError, Outcome, Robot, action
-from pyrobots_aio._core._loops import clock_of, current_loop, running_here
+from pyrobots_aio._core._loops import clock_of, current_loop, makes_plain_tasks, running_here
 from pyrobots_aio.loops import VirtualTimeLoop
 from pyrobots_aio.state import StateStore
 
@@ -101,6 +102,45 @@ def test_the_clock_of_asyncio_s_loop_is_the_monotonic_clock_itself() -> None:
         assert clock_of(virtual) == virtual.time
     finally:
         virtual.close()
+
+
+def test_plain_tasks_only_where_create_task_is_asyncio_s_own_and_no_factory_is_set() -> None:
+    loop = asyncio.new_event_loop()
+    try:
+        assert makes_plain_tasks(loop)
+        loop.set_task_factory(lambda loop, coro: asyncio.Task(coro, loop=loop))
+        assert not makes_plain_tasks(loop)
+        loop.set_task_factory(None)
+        loop.create_task = lambda coro, name=None: asyncio.Task(coro, loop=loop)  # type: ignore[assignment, method-assign]
+        assert not makes_plain_tasks(loop)
+    finally:
+        loop.close()
+
+
+@action
+async def task_name(robot: Robot) -> tuple[str, str]:
+    task = asyncio.current_task()
+    assert task is not None
+    return type(task).__name__, task.get_name()
+
+
+def test_an_action_s_task_comes_from_the_loop_s_task_factory_when_it_has_one() -> None:
+    made: list[asyncio.Task[Any]] = []
+
+    def factory(loop: asyncio.AbstractEventLoop, coro: Any) -> asyncio.Task[Any]:
+        made.append(asyncio.Task(coro, loop=loop))  # (the loop names it next)
+        return made[-1]
+
+    async def main(with_factory: bool) -> tuple[str, str]:
+        if with_factory:
+            asyncio.get_running_loop().set_task_factory(factory)
+        async with Robot() as robot:
+            return await task_name(robot)
+
+    assert asyncio.run(main(with_factory=False)) == ("Task", "task_name#1")
+    assert made == []
+    assert asyncio.run(main(with_factory=True)) == ("Task", "task_name#1")
+    assert "task_name#1" in [task.get_name() for task in made]
 
 
 def test_a_bound_store_stamps_with_its_loop_s_clock_and_an_unbound_one_with_the_running_loop() -> (

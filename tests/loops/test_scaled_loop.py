@@ -43,7 +43,8 @@ def test_run_scaled_runs_main_with_its_arguments_on_the_loop_of_its_rate(rate: f
 
 CLOSE_UNDER_A_SIGNAL = """
 import asyncio, signal, sys
-from pyrobots_aio.loops import SignalSafeLoop, scaled_loop
+from pyrobots_aio.loops import scaled_loop
+from pyrobots_aio.loops._closing import SignalSafeLoop
 
 kinds = {"stock": asyncio.SelectorEventLoop, "safe": SignalSafeLoop}
 kinds["scaled"] = lambda: scaled_loop(1)

@@ -10,13 +10,8 @@ import anyio
 import pytest
 
 from pyrobots_aio import EventLoopError
-from pyrobots_aio.loops import (
-    VirtualTimeLoop,
-    VirtualTimePolicy,
-    is_virtual,
-    new_virtual_loop,
-    run_lockstep,
-)
+from pyrobots_aio.loops import VirtualTimeLoop, is_virtual, new_virtual_loop, run_lockstep
+from pyrobots_aio.loops._virtual import VirtualTimePolicy
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from pyrobots_aio.motion import MAX_DISTANCE, MAX_TURN
+from pyrobots_aio.motion._math import MAX_DISTANCE, MAX_TURN
 
 if TYPE_CHECKING:
     from .conftest import Base

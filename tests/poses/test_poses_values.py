@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pyrobots_aio import InvalidPoseError, PoseError
-from pyrobots_aio.poses import UNIT_TOLERANCE, Pose, PoseManager
+from pyrobots_aio.poses import Pose, PoseManager
+from pyrobots_aio.poses._math import UNIT_TOLERANCE
 
 HALF = math.sqrt(0.5)
 # Round-trip tolerance: float64 rotations composed a few times stay within ~1e-13;

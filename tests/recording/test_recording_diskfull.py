@@ -162,8 +162,11 @@ def test_a_file_size_limit_stops_the_demo_cleanly(tmp_path: Path) -> None:
     assert path.stat().st_size <= SMALL
 
 
-_RECORD = re.compile(r" +\d+\.\d{3}  [A-Z]+ +(\S+)")
-"""The first line of a console log record: time since start, level, logger."""
+_RECORD = re.compile(r" +(?:\d+\.\d{3})?  (?:DEBUG|INFO|WARNING|ERROR|CRITICAL) +(\S+)")
+"""The first line of a console log record: time since start, level, logger.
+
+The time is blank in a record logged off the loop (the watchdog's thread).
+"""
 
 
 def _without_watchdog(stderr: str) -> list[str]:

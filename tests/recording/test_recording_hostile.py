@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import html.parser
 import json
+import math
 import re
 import tracemalloc
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -47,7 +48,7 @@ HOSTILE = "x\"><script>alert(1)</script><img src=x onerror=alert(2)>'&"
 TAGS = {
     "html", "head", "meta", "title", "style", "body", "h1", "h2", "p", "span", "i", "svg",
     "g", "text", "rect", "line", "path", "polyline", "polygon", "circle", "script", "defs",
-    "pattern",
+    "pattern", "button", "div",
 }  # fmt: skip
 CLASS = re.compile(r"^[a-z_][a-z0-9_ -]*$")
 DEEP = 1500
@@ -240,8 +241,8 @@ def test_coordinates_beyond_reach_are_drawn_at_its_edge(tmp_path: Path) -> None:
         {"name": "wall", "shape": "box", "x": 0, "y": 0, "half": [1, 1]},
     ]
     samples = [
-        {"t": 0.0, "state": {"v": 1e308, "w": -1e308}, "pose": [1e308, -1e308, 0.0]},
-        {"t": 1.0, "state": {"v": -1e308, "w": 1e308}, "pose": [-1e308, 1e308, 0.0]},
+        {"t": 0.0, "state": {"v": 1e308, "w": -1e308}, "pose": [1e308, -1e308, 1e308]},
+        {"t": 1.0, "state": {"v": -1e308, "w": 1e308}, "pose": [-1e308, 1e308, -1e308]},
     ]
     _write(path, _header(floor_plan=plan), *samples, end=2.0)
     page = render_timeline_html(load(path))  # was ZeroDivisionError
@@ -249,8 +250,11 @@ def test_coordinates_beyond_reach_are_drawn_at_its_edge(tmp_path: Path) -> None:
     assert page.count('<polygon class="shape') == 1  # the wall; the others are beyond reach
     track = re.search(r'data-track="([^"]*)"', page)
     assert track is not None
+    yaw = math.remainder(1e308, math.tau)  # headings are drawn as turns within ±pi
+    assert -math.pi <= yaw <= math.pi
     assert track.group(1) == (
-        "0.000,1000000000.0000,-1000000000.0000;1.000,-1000000000.0000,1000000000.0000"
+        f"0.000,1000000000.0000,-1000000000.0000,{yaw:.3f};"
+        f"1.000,-1000000000.0000,1000000000.0000,{-yaw:.3f}"
     )
     plots = re.findall(r'<polyline class="plot" points="([^"]*)" data-key="(\w)"', page)
     assert [key for _, key in plots] == ["v", "w"]

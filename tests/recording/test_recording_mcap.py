@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
+from foxglove_scene import check_scene
 from pyrobots_aio import CorruptRecordingError, RecordingError, Robot
 from pyrobots_aio.recording import (
     JsonlRecorder,
@@ -193,6 +194,37 @@ async def test_pose_frames_and_logs_use_foxglove_well_known_schemas(tmp_path: Pa
             ]
             == getattr(fox, name).get_schema().name
         )
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_the_arena_is_one_scene_update_at_the_start(tmp_path: Path) -> None:
+    path = tmp_path / "walk.mcap"
+    await _walk(McapRecorder(path))
+    _, channels, _, messages = _read(path)
+    assert channels["/pyrobots/arena"] == "foxglove.SceneUpdate"
+    [(scene, stamp)] = [(m, s) for t, m, s in messages if t == "/pyrobots/arena"]
+    assert stamp == min(s for _, _, s in messages)  # there from the first moment
+    plan = list(load(path).header.floor_plan)
+    assert {s["kind"] for s in plan} == {"wall", "obstacle", "dock"}
+    assert {s["shape"] for s in plan} == {"box", "circle"}
+    check_scene(scene, plan)
+    walls = [e for e in scene["entities"] if e["id"].startswith("wall")]
+    assert {(c["size"]["z"], c["pose"]["position"]["z"]) for e in walls for c in e["cubes"]} == {
+        (0.3, 0.15)  # 30 cm high, standing on the floor
+    }
+
+
+@pytest.mark.virtual_time
+@pytest.mark.asyncio
+async def test_a_robot_without_a_world_has_no_arena(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    robot = Robot()
+    with McapRecorder(path).attach(robot):
+        async with robot:
+            await robot.sleep(0.5)
+    _, channels, _, _ = _read(path)
+    assert "/pyrobots/arena" not in channels
 
 
 @pytest.mark.virtual_time

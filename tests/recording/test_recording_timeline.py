@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import json
+import math
 import re
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -86,3 +88,83 @@ def test_empty_and_partial_recordings_still_render() -> None:
     page = render_timeline_html(MemoryRecorder().recording())
     assert "the recording was not closed" in page
     assert _count(page, r'<rect class="action ') == 0
+
+
+def _samples(
+    path: Path, samples: list[dict[str, Any]], end: float, plan: list[dict[str, Any]] | None = None
+) -> Recording:
+    header = {"format": "pyrobots_aio.recording", "version": 1, "t0": 0.0, "floor_plan": plan or []}
+    lines = [header, *samples, {"end": end, "events": len(samples)}]
+    path.write_text("".join(json.dumps(line) + "\n" for line in lines))
+    return load(path)
+
+
+def test_axes_run_between_round_numbers(tmp_path: Path) -> None:
+    samples = [
+        {"t": 0.0, "state": {"v": 0.0, "w": 0.0}},
+        {"t": 0.001, "state": {"v": 0.213, "w": 0.000231}},  # the w axis read 0.000231
+    ]
+    page = render_timeline_html(_samples(tmp_path / "small.jsonl", samples, end=0.0023))
+    plots = re.findall(r'<text class="tick" [^>]*>([^<]*)</text>', page)
+    assert plots == ["0.3", "0", "0.0003", "0"]  # v: top, bottom; w: top, bottom
+    axis = re.search(r'<g class="axis time"[^>]*>(.*?)</g>', page)
+    assert axis is not None
+    seconds = re.findall(r'text-anchor="middle">([^<]*)</text>', axis.group(1))
+    assert seconds == ["0", *(f"{i * 0.0002:.4f}" for i in range(1, 12))]
+
+
+def test_battery_cliff_and_encoder_rows_are_drawn_when_recorded(tmp_path: Path) -> None:
+    state: dict[str, object] = {"v": 0.1, "bumper": False, "ir_left": 0.4}
+    more = {"battery": 0.9, "encoder_right": 2.0, "encoder_left": 1.0, "cliff_side": False}
+    plain = _samples(tmp_path / "plain.jsonl", [{"t": 0.0, "state": state}], end=1.0)
+    full = _samples(tmp_path / "full.jsonl", [{"t": 0.0, "state": state | more}], end=1.0)
+    row = r'<text class="label" x="22" y="[\d.]+" data-key="(\w+)" data-unit="([\w/]*)"'
+    assert re.findall(row, render_timeline_html(plain)) == [
+        ("v", "m/s"),
+        ("ir_left", "m"),
+        ("bumper", ""),
+    ]
+    assert re.findall(row, render_timeline_html(full)) == [
+        ("v", "m/s"),
+        ("ir_left", "m"),
+        ("bumper", ""),
+        ("cliff_side", ""),
+        ("battery", ""),
+        ("encoder_left", "rad"),
+        ("encoder_right", "rad"),
+    ]
+
+
+def _bump(t: float, x: float) -> list[dict[str, Any]]:
+    return [
+        {"t": t, "state": {"bumper": True}, "pose": [x, 0.0, 0.0]},
+        {"t": t + 0.1, "state": {"bumper": False}, "pose": [x, 0.0, 0.0]},
+    ]
+
+
+def test_bumps_in_one_place_are_drawn_once_with_their_count(tmp_path: Path) -> None:
+    corner = [sample for i in range(20) for sample in _bump(i, 1.0)]  # 20 times at x = 1 m
+    run = [{"t": 0.0, "state": {"bumper": False}, "pose": [0.0, 0.0, 0.0]}, *corner]
+    page = render_timeline_html(_samples(tmp_path / "bumps.jsonl", [*run, *_bump(25, 3.0)], 30))
+    counts = re.findall(r'<path class="mark bump" [^>]* data-count="(\d+)"><title>([^<]*)', page)
+    assert [(count, title.splitlines()[:2]) for count, title in counts] == [
+        ("20", ["20 times here:", "bump (bumper) at 0.000 s"]),
+        ("1", ["bump (bumper) at 25.000 s"]),
+    ]
+    assert counts[0][1].splitlines()[-1] == "and 12 more"  # 8 moments listed
+    assert re.findall(r'<text class="count"[^>]*>(\d+)</text>', page) == ["20"]
+    assert "bump (21)</span>" in page  # the legend counts them all
+
+
+def test_the_heading_is_drawn_along_the_path(tmp_path: Path) -> None:
+    north = [{"t": i / 10, "pose": [i / 10, 0.0, math.pi / 2], "state": {}} for i in range(101)]
+    page = render_timeline_html(_samples(tmp_path / "north.jsonl", north, end=10.1))
+    # 10 m drawn over 560 px, an arrow after each 60 px: one for each 11 poses of 5.6 px
+    turns = re.findall(
+        r'<path class="heading" transform="translate\([\d.,]+\) rotate\((-?\d+)\)"', page
+    )
+    assert turns == ["-90"] * 9
+    assert '<path class="here-heading" transform="translate(-99,-99)"' in page
+    track = re.search(r'data-track="([^"]*)"', page)
+    assert track is not None
+    assert track.group(1).split(";")[1] == "0.100,0.1000,0.0000,1.571"  # t, x, y, yaw

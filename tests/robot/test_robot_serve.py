@@ -10,7 +10,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import os
+import re
 import socket
 import struct
 import sys
@@ -20,6 +22,7 @@ from typing import Any
 import pytest
 import websockets
 
+from foxglove_scene import check_scene
 from pyrobots_aio import PyRobotsError, Robot
 from pyrobots_aio.sim import SimRobot
 
@@ -155,8 +158,12 @@ async def test_each_robot_stops_its_server_and_leaves_no_thread() -> None:
 
 
 @pytest.mark.asyncio
-async def test_a_plain_robot_streams_its_state() -> None:
-    async with Robot(serve=0) as robot:
+async def test_a_plain_robot_streams_its_state_timed_from_its_start() -> None:
+    loop = asyncio.get_running_loop()
+    robot = Robot(serve=0)
+    before = loop.time()  # the machine's monotonic clock: hours or days, not seconds of a run
+    async with robot:
+        entered = loop.time()
         assert robot.live is not None
         assert robot.live.port is not None
         url = f"ws://127.0.0.1:{robot.live.port}"
@@ -169,11 +176,86 @@ async def test_a_plain_robot_streams_its_state() -> None:
             await client.subscribe("/pyrobots/state/speed")
             await asyncio.sleep(0.1)
             robot.state.speed = 0.5
+            written = robot.state.timestamp("speed")
             await asyncio.wait_for(
                 client.read_until(lambda c: "/pyrobots/state/speed" in c.received), 30
             )
     (sample,) = client.received["/pyrobots/state/speed"]
     assert (sample["key"], sample["value"]) == ("speed", 0.5)
+    # the robot started between `before` and `entered`: the sample's time is the write's since then
+    assert written - entered <= sample["time"] <= written - before
+
+
+async def _arena(port: int) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The arena's channel, and the scene a client gets when it subscribes to it."""
+    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=[PROTOCOL]) as ws:
+        client = FoxgloveClient(ws)
+        await asyncio.wait_for(client.read_until(lambda c: "/pyrobots/arena" in c.channels), 30)
+        await client.subscribe("/pyrobots/arena")
+        await asyncio.wait_for(client.read_until(lambda c: "/pyrobots/arena" in c.received), 30)
+    (scene,) = client.received["/pyrobots/arena"]
+    return client.channels["/pyrobots/arena"], scene
+
+
+@pytest.mark.asyncio
+async def test_each_client_gets_the_arena_when_it_subscribes() -> None:
+    robot = SimRobot(realtime=True, serve=0)
+    async with robot:
+        assert robot.live is not None
+        port = robot.live.port
+        assert port is not None
+        channel, scene = await _arena(port)
+        assert channel["schemaName"] == "foxglove.SceneUpdate"
+        assert json.loads(channel["schema"])["title"] == "foxglove.SceneUpdate"
+        check_scene(scene, robot.world.floor_plan())
+        _, again = await _arena(port)  # a client that comes later gets it too
+        assert again == scene
+
+
+@pytest.mark.parametrize(
+    "offered", [["foxglove.websocket.v1"], ["foxglove.websocket.v1", "foxglove.sdk.v1"]]
+)
+@pytest.mark.asyncio
+async def test_a_client_must_offer_foxglove_sdk_v1(offered: list[str]) -> None:
+    """Older Foxglove clients offer only foxglove.websocket.v1: refused, and the log says why."""
+    loop = asyncio.get_running_loop()
+    refused: asyncio.Future[str] = loop.create_future()
+
+    class Hint(logging.Handler):  # the SDK logs from one of its own threads
+        def emit(self, record: logging.LogRecord) -> None:
+            text = record.getMessage()
+            loop.call_soon_threadsafe(lambda: refused.done() or refused.set_result(text))
+
+    sdk_log = logging.getLogger("foxglove.websocket.server")
+    handler = Hint(logging.ERROR)
+    sdk_log.addHandler(handler)
+    try:
+        async with Robot(serve=0) as robot:
+            assert robot.live is not None
+            url = f"ws://127.0.0.1:{robot.live.port}"
+            protocols = [websockets.Subprotocol(p) for p in offered]
+            if "foxglove.sdk.v1" in offered:  # what the Foxglove app offers
+                async with websockets.connect(url, subprotocols=protocols) as ws:
+                    assert ws.subprotocol == "foxglove.sdk.v1"
+                    assert json.loads(await ws.recv())["op"] == "serverInfo"
+                return
+            with pytest.raises(websockets.InvalidStatus) as info:
+                await websockets.connect(url, subprotocols=protocols)
+            line = await asyncio.wait_for(refused, 30)  # a hang guard
+    finally:
+        sdk_log.removeHandler(handler)
+    response = info.value.response
+    assert (response.status_code, bytes(response.body)) == (
+        400,
+        b"Missing expected sec-websocket-protocol header",
+    )
+    assert re.fullmatch(r"Dropping client 127\.0\.0\.1:\d+: handshake failed: (.*)", line)
+    assert line.endswith(
+        ": the live view speaks the foxglove.sdk.v1 WebSocket subprotocol, which the Foxglove "
+        "app offers; a client that offers only foxglove.websocket.v1 (older Foxglove Studio and "
+        "Lichtblick releases) gets HTTP 400 'Missing expected sec-websocket-protocol header': "
+        "update it"
+    )
 
 
 @pytest.mark.parametrize("port", [-1, 65536, "8765", 1.5, True])

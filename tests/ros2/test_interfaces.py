@@ -17,12 +17,8 @@ import pytest
 from ros2_support import DEADLINE, require_rclpy
 
 from pyrobots_aio import InterfaceBuildError
-from pyrobots_aio.ros2 import (
-    InterfaceOutcome,
-    build_interfaces,
-    interface_packages,
-    missing_tools,
-)
+from pyrobots_aio.ros2 import InterfaceOutcome, build_interfaces, interface_packages
+from pyrobots_aio.ros2._interfaces import missing_tools
 
 require_rclpy()
 if missing_tools() and os.environ.get("PYROBOTS_AIO_REQUIRE_ROS2") != "1":

@@ -1,4 +1,5 @@
-"""The README's ROS 2 snippets run, as a user would run them: beside a sim-node process."""
+"""The ROS 2 snippets of the README and the ROS 2 guide run, as a user would run them: beside a
+sim-node process."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from pathlib import Path
 import pytest
 from ros2_support import DEADLINE, require_rclpy
 
+from snippets_support import GUIDES, README, blocks
+
 require_rclpy()
 pytest.importorskip(
     "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
@@ -17,16 +20,25 @@ pytest.importorskip(
 
 from test_sim_node import sim_node, stop  # noqa: E402
 
-README = (Path(__file__).parent.parent.parent / "README.md").read_text()
-SNIPPETS = re.findall(r"```python ros2\n(.*?)```", README, flags=re.DOTALL)
-ROBOT_SNIPPETS = re.findall(r"```python ros2-robot\n(.*?)```", README, flags=re.DOTALL)
+DOCUMENTS = (README, GUIDES / "guides" / "ros2.md")
+
+
+def _snippets(marker: str) -> list[str]:
+    """The documents' blocks with ``marker``, each code once (the README and the guide share)."""
+    return sorted({code for document in DOCUMENTS for code in blocks(document, "python", marker)})
+
+
+SNIPPETS = _snippets("ros2")
+ROBOT_SNIPPETS = _snippets("ros2-robot")
 
 
 def test_the_readme_has_a_ros2_snippet() -> None:
     assert len(SNIPPETS) == 1
     assert len(ROBOT_SNIPPETS) == 1
-    assert "pyrobots-aio sim-node --namespace /robot1 --rate 4" in README
-    assert "pyrobots-aio sim-node --namespace /robot1" in README
+    for document in (d for d in DOCUMENTS if blocks(d, "python", "ros2")):
+        text = document.read_text()
+        assert "pyrobots-aio sim-node --namespace /robot1 --rate 4" in text
+        assert "pyrobots-aio sim-node --namespace /robot1" in text
 
 
 @pytest.mark.asyncio

@@ -19,7 +19,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data  # 
 from sensor_msgs.msg import Range  # noqa: E402
 
 from pyrobots_aio import Robot  # noqa: E402
-from pyrobots_aio.ros2 import attach_ros2, qos_profile  # noqa: E402
+from pyrobots_aio.ros2 import attach_ros2  # noqa: E402
+from pyrobots_aio.ros2._rclpy import qos_profile  # noqa: E402
 
 if TYPE_CHECKING:
     from collections.abc import Callable

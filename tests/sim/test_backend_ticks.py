@@ -7,8 +7,8 @@ import itertools
 
 import pytest
 
+from pyrobots_aio.motion._ticking import TICKS_PER_TURN
 from pyrobots_aio.sim import SimRobot
-from pyrobots_aio.sim._backend import TICKS_PER_TURN
 
 pytestmark = [pytest.mark.asyncio, pytest.mark.virtual_time]
 

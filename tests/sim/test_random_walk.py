@@ -62,12 +62,10 @@ def test_the_walk_imports_without_mujoco() -> None:
     assert (done.returncode, done.stdout, done.stderr) == (0, "ok\n", "")
 
 
-def test_the_names_that_moved_to_the_motion_layer_are_still_importable() -> None:
+def test_the_simulator_is_a_motion_base_and_locks_its_wheels() -> None:
     from pyrobots_aio import motion
     from pyrobots_aio.sim import WHEELS
-    from pyrobots_aio.sim._robot import ANGLE_TOLERANCE, DISTANCE_TOLERANCE, DOCK_APPROACH
 
     assert WHEELS is motion.WHEELS
-    assert (ANGLE_TOLERANCE, DISTANCE_TOLERANCE) == (motion.ANGLE_TOLERANCE, 0.002)
-    assert DOCK_APPROACH == motion.DOCK_APPROACH
+    assert motion.DISTANCE_TOLERANCE == 0.002
     assert issubclass(SimRobot, motion.DriveBase)

@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 from pyrobots_aio import ActionInterrupted, LockstepError, Outcome
+from pyrobots_aio.motion import ANGLE_TOLERANCE
 from pyrobots_aio.sim import WHEELS, SimRobot, run
-from pyrobots_aio.sim._robot import ANGLE_TOLERANCE
 
 if TYPE_CHECKING:
     from collections.abc import Mapping

@@ -104,7 +104,7 @@ class RunQueue:
     file kept open (about 1 µs a read; opening it each time costs ten times
     that, and a loop's beat reads it).
 
-    Example:
+    Examples:
         >>> import threading
         >>> queue = RunQueue(threading.get_native_id())
         >>> waited = queue.waited()
@@ -154,7 +154,7 @@ def check_block_threshold(value: object) -> float | None:
         ValueError: Not None nor a finite number of seconds of at least
             `MIN_BLOCK_THRESHOLD`; the message names the value and the fix.
 
-    Example:
+    Examples:
         >>> check_block_threshold(0.25), check_block_threshold(None)
         (0.25, None)
     """
@@ -225,7 +225,7 @@ class BlockWatch:
             blocked loop (None: a plain callback); returns the action it runs,
             if any. It must only read.
 
-    Example:
+    Examples:
         >>> import asyncio, logging, time
         >>> from pyrobots_aio._core._instrument import Instruments
         >>> from pyrobots_aio._core._logging import LogScope

@@ -111,7 +111,7 @@ class ExecEvent:
         action: The id of the action concerned, if any.
         name: The name of the action (or monitor, or state key) concerned.
 
-    Example:
+    Examples:
         >>> event = ActionFinished(2.5, 1, "walk", outcome="succeeded", error=None)
         >>> event.kind.value, event.data
         ('action.finished', {'outcome': 'succeeded', 'error': None})
@@ -595,7 +595,7 @@ _TYPES: dict[EventKind, type[ExecEvent]] = {
 def event_type(kind: EventKind) -> type[ExecEvent]:
     """The class of the events of ``kind``.
 
-    Example:
+    Examples:
         >>> event_type(EventKind.ACTION_SPAWNED).__name__
         'ActionSpawned'
     """

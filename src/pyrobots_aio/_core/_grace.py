@@ -43,7 +43,7 @@ class Ladder(Generic[T]):
     follows `Stage.ESCALATE` only if the escalation returned True. An item
     done meanwhile is for ``step`` to notice (it returns False).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio.sim import run
         >>> async def main() -> list[tuple[str, str, float]]:

@@ -37,7 +37,7 @@ class Instrument(Protocol):
 class Instruments:
     """The instruments attached to one robot.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import ActionStarted
         >>> hub = Instruments()
         >>> class Count:

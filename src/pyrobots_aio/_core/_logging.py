@@ -24,7 +24,7 @@ def check_level(level: object) -> int:
     Raises:
         ValueError: Not a known level name nor a non-negative int.
 
-    Example:
+    Examples:
         >>> check_level("debug"), check_level(30)
         (10, 30)
     """
@@ -41,7 +41,7 @@ def check_level(level: object) -> int:
 class LogScope:
     """The log level of one robot (None: defer to the loggers' configuration).
 
-    Example:
+    Examples:
         >>> scope = LogScope()
         >>> log = scope.logger("pyrobots_aio.actions")
         >>> scope.level = logging.WARNING  # robot.silent(): what goes wrong, nothing else

@@ -51,6 +51,18 @@ def clock_of(loop: asyncio.AbstractEventLoop) -> Callable[[], float]:
     return loop.time
 
 
+def makes_plain_tasks(loop: asyncio.AbstractEventLoop) -> bool:
+    """Whether ``loop.create_task(coro, name=n)`` is ``asyncio.Task(coro, loop=loop, name=n)``.
+
+    It is when the method is asyncio's own and no task factory is set. Then a
+    hot path may make the task itself, without the two Python calls of
+    ``create_task`` (and its ``_check_closed``). Asked when the robot starts:
+    a task factory must be set before.
+    """
+    own = getattr(loop.create_task, "__func__", None) is asyncio.BaseEventLoop.create_task
+    return own and loop.get_task_factory() is None
+
+
 THREADSAFE_HINT = (
     "from another thread, use robot.call_soon_threadsafe(fn, *args) or "
     "robot.run_threadsafe(coro) (asyncio.run_coroutine_threadsafe), or "

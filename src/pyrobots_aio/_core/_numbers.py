@@ -31,7 +31,7 @@ def shown(value: object) -> str:
     An int too large for a float is shown by its size (its digits could run to
     thousands, and Python refuses to print more than 4300 of them).
 
-    Example:
+    Examples:
         >>> shown(0.5), shown(-(10**400)), shown("x" * 300)[-6:]
         ('0.5', '-an int of about 10**400', 'xxx...')
     """
@@ -58,7 +58,7 @@ def as_float(value: object) -> float | None:
 
     A bool is not a number here; an int too large for a float is not finite.
 
-    Example:
+    Examples:
         >>> as_float(3), as_float(True), as_float(float("nan")), as_float(10**400)
         (3.0, None, None, None)
     """
@@ -101,7 +101,7 @@ def finite(
         ValueError: ``"{name} must be {must}, got {value}"``, with a hint for a
             bool or an int too large for a float.
 
-    Example:
+    Examples:
         >>> finite("speed", 2, positive=True)
         2.0
         >>> finite("speed", True)

@@ -230,7 +230,7 @@ def stop_on_signals() -> SignalStop:
     normally; the count goes on until the event loop closes. Signals the
     program handles itself are left alone.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio.cli import stop_on_signals
         >>> from pyrobots_aio.recording import JsonlRecorder

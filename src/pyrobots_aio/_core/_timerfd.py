@@ -72,7 +72,7 @@ class Timer:
     Raises:
         OSError: No kernel timers here (not Linux), or none left.
 
-    Example:
+    Examples:
         >>> timer = Timer()
         >>> timer.arm(0.01)
         >>> timer.wait()  # blocks 10 ms, without the GIL

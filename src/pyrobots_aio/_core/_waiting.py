@@ -28,7 +28,7 @@ from ._numbers import finite
 class Countdown:
     """A future done once `tick` has been called ``count`` times (at once if ``count`` is 0).
 
-    Example:
+    Examples:
         >>> async def main() -> bool:
         ...     countdown = Countdown(asyncio.get_running_loop(), 2)
         ...     countdown.tick()
@@ -63,7 +63,7 @@ async def wait_shielded(waiter: asyncio.Future[Any], deadline: float | None = No
     Returns:
         True if ``waiter`` is done, False if the deadline passed first.
 
-    Example:
+    Examples:
         >>> async def main() -> bool:
         ...     loop = asyncio.get_running_loop()
         ...     fut = loop.create_future()
@@ -105,7 +105,7 @@ async def sleep_until(deadline: float) -> None:
     itself, so a virtual-time loop wakes exactly there: no float residue left
     to sleep on.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import run
         >>> async def main() -> float:
         ...     await sleep_until(1.2)

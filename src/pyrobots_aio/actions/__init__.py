@@ -3,11 +3,9 @@
 from ._decorator import Action as Action
 from ._decorator import BoundAction as BoundAction
 from ._decorator import action as action
-from ._executive import Executive as Executive
 from ._handle import ActionHandle as ActionHandle
 from ._handle import current_action as current_action
 from ._info import ActionInfo as ActionInfo
-from ._info import render_tree as render_tree
 from ._lock import lock as lock
 from ._states import ActionState as ActionState
 from ._states import Outcome as Outcome
@@ -18,10 +16,8 @@ __all__ = [
     "ActionInfo",
     "ActionState",
     "BoundAction",
-    "Executive",
     "Outcome",
     "action",
     "current_action",
     "lock",
-    "render_tree",
 ]

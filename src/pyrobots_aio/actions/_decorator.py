@@ -144,7 +144,7 @@ def action(
     actuators there, and restore them. A hook may be a plain function or
     return an awaitable (run on its own; a failure is logged).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot, action, ActionCancelled
         >>> @action
         ... async def safe_walk(robot: Robot, speed: float = 0.2) -> None:

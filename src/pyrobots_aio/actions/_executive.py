@@ -36,7 +36,7 @@ from .._core._events import (
 from .._core._grace import Ladder, Stage
 from .._core._instrument import Instruments
 from .._core._logging import LogScope
-from .._core._loops import clock_of, running_here, wrong_loop
+from .._core._loops import clock_of, makes_plain_tasks, running_here, wrong_loop
 from .._core._numbers import finite
 from .._core._waiting import wait_shielded
 from .._exceptions import RobotNotRunningError, TooManyActions
@@ -87,6 +87,8 @@ class Executive:
         """The ident of the thread the robot's loop runs in (`running_here`)."""
         self.clock: Callable[[], float] = time.monotonic
         """The loop's clock (`clock_of`): the actions' timestamps."""
+        self.plain_tasks = False
+        """Whether an action's task is made as ``asyncio.Task`` (`makes_plain_tasks`)."""
         self._running: dict[int, ActionHandle[Any]] = {}
         """Every action not yet done, by id, in start order."""
         self._next_id = 1
@@ -114,6 +116,7 @@ class Executive:
         self.thread = threading.current_thread().name
         self.thread_ident = get_ident()
         self.clock = clock_of(loop)
+        self.plain_tasks = makes_plain_tasks(loop)
         self._ladder = Ladder(loop, self.cancel_grace, self._overdue)
 
     def check_loop(self, what: str) -> asyncio.AbstractEventLoop:

@@ -46,6 +46,7 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 
 _new = object.__new__
+_Task = asyncio.Task
 # A waiter is an asyncio.Future (the C one): its methods, called unbound, are specialized
 # calls on Python 3.11 (a bound method call on an instance with a dict slot is not).
 _done, _set_result = asyncio.Future.done, asyncio.Future.set_result
@@ -72,6 +73,8 @@ class Host(Protocol):
     thread: str
     thread_ident: int
     clock: Callable[[], float]
+    plain_tasks: bool
+    """Whether the loop's ``create_task`` makes a plain ``asyncio.Task`` (no task factory)."""
     log: ScopedLogger
     instruments: Instruments
     resources: ResourceManager[Any]
@@ -111,7 +114,7 @@ class Host(Protocol):
 class ActionHandle(Generic[T]):
     """A started action: await it for its result, cancel it, inspect it.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Outcome, Robot, action
         >>> @action
@@ -220,7 +223,11 @@ class ActionHandle(Generic[T]):
         self._unretrieved = None
         if parent is not None:
             parent._adopt(self)
-        self._task = loop.create_task(self._run(coro), name=f"{name}#{ident}")
+        run, task_name = self._run(coro), f"{name}#{ident}"
+        if executive.plain_tasks:  # what loop.create_task would make, two Python calls sooner
+            self._task = _Task(run, loop=loop, name=task_name)
+        else:
+            self._task = loop.create_task(run, name=task_name)
         return self
 
     def _adopt(self, child: ActionHandle[Any]) -> None:
@@ -511,7 +518,7 @@ class ActionHandle(Generic[T]):
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(handle.pause, reason)``).
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot, action
             >>> @action

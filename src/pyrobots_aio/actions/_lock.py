@@ -195,7 +195,7 @@ def lock(
             without ``(RESOURCE)`` included).
         LockUsageError: Bad options; used outside an action; a plain ``with``.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot, action
         >>> from pyrobots_aio.actions import lock
         >>> from pyrobots_aio.resources import CompoundResource, Resource

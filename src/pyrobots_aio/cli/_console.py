@@ -69,7 +69,7 @@ def wants_colour(stream: Stream) -> bool:
 def short_name(name: str, width: int = NAME_WIDTH) -> str:
     """Drop the ``pyrobots_aio.`` prefix; abbreviate leading parts of a long dotted name.
 
-    Example:
+    Examples:
         >>> short_name("pyrobots_aio.sim.random_walk")
         'sim.random_walk'
         >>> short_name("myservice.controllers.navigation.planner")
@@ -88,7 +88,7 @@ def short_name(name: str, width: int = NAME_WIDTH) -> str:
 def format_time(seconds: float | None) -> str:
     """The time column: seconds with milliseconds, right-aligned; blank for None.
 
-    Example:
+    Examples:
         >>> format_time(12.34)
         '   12.340'
         >>> format_time(None) == " " * TIME_WIDTH
@@ -107,7 +107,7 @@ class ConsoleHandler(logging.Handler):
             terminal, and never when ``NO_COLOR`` is set.
         start: The loop time shown as 0 (settable; see the module for None).
 
-    Example:
+    Examples:
         >>> import io, logging
         >>> out = io.StringIO()
         >>> log = logging.getLogger("pyrobots_aio.demo")
@@ -204,7 +204,7 @@ def install_console_handler(
     Returns:
         The handler, to remove it later (``logging.getLogger().removeHandler(h)``).
 
-    Example:
+    Examples:
         >>> import logging
         >>> from pyrobots_aio.cli import install_console_handler
         >>> handler = install_console_handler(logging.DEBUG)  # doctest: +SKIP

@@ -7,7 +7,9 @@ a terminal, otherwise a line of counters every ten simulated seconds (with
 and with ``--serve`` a live view in Foxglove. At the end: the walk's report and the summary of its
 recording (the file of ``--record``, JSON Lines or MCAP by its extension, else
 an in-memory recording). Every state key and the pose are recorded at the
-control rate.
+control rate. With ``--keep-serving``, the live view then stays up (Foxglove
+stays connected, with what it received, and shows the arena to a client that
+comes later) until Ctrl-C or SIGTERM, which end the demo with status 0.
 
 Ctrl-C and SIGTERM stop the walk in order (`stop_on_signals`): the first
 shuts the robot down (its cleanup bounded, the wheels stopped, the recording
@@ -36,6 +38,7 @@ from pyrobots_aio.recording import (
     summarize,
 )
 from pyrobots_aio.robot import SignalStop, stop_on_signals
+from pyrobots_aio.telemetry import LiveView
 
 from ._live import EventLines, LiveStatus, Progress, Tally
 from ._paths import unwritable
@@ -58,6 +61,8 @@ DEFAULT_MOVES = 10
 """Moves made when no ``--duration`` is given."""
 PROGRESS = 10.0
 """Simulated seconds between progress lines (not on a terminal, without ``-v``)."""
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+"""What ends ``--keep-serving``."""
 
 
 def positive_seconds(text: str) -> float:
@@ -146,7 +151,14 @@ def add_parser(demos: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
         const=DEFAULT_PORT,
         type=port_number,
         help="stream the run live over Foxglove's WebSocket protocol on 127.0.0.1:PORT "
-        f"(default {DEFAULT_PORT}; the live extra); use it with --realtime to watch it",
+        f"(default {DEFAULT_PORT}; the live extra); use it with --realtime to watch it, "
+        "or with --keep-serving",
+    )
+    walk.add_argument(
+        "--keep-serving",
+        action="store_true",
+        help="with --serve: after the walk, keep the live view up (Foxglove stays connected "
+        "with what it received) until Ctrl-C",
     )
     walk.add_argument(
         "-v",
@@ -258,15 +270,20 @@ def _closing_note(options: argparse.Namespace, show: _Show) -> Iterator[None]:
 
 
 def _walk(
-    options: argparse.Namespace, recorder: Recorder[Sink], show: _Show, stopping: SignalStop
+    options: argparse.Namespace,
+    recorder: Recorder[Sink],
+    show: _Show,
+    stopping: SignalStop,
+    live: LiveView | None,
 ) -> Callable[[], Coroutine[Any, Any, WalkReport]]:
     from pyrobots_aio.sim import SimRobot
     from pyrobots_aio.sim.random_walk import random_walk
 
     moves = 0 if options.duration is not None else DEFAULT_MOVES
+    serve = options.serve if live is None else live  # a view of our own outlives the robot
 
     async def main() -> WalkReport:
-        robot = SimRobot(seed=options.seed, realtime=options.realtime, serve=options.serve)
+        robot = SimRobot(seed=options.seed, realtime=options.realtime, serve=serve)
         with stopping, recorder.attach(robot), _closing_note(options, show):
             async with robot:
                 show.attach(robot)  # times shown count from here, as the recording's do
@@ -290,20 +307,70 @@ def _report(report: WalkReport, wall: float, *, realtime: bool) -> str:
     )
 
 
+async def _until_signal(ready: str, out: TextIO) -> None:
+    """Print ``ready``, then wait for SIGINT or SIGTERM (``--keep-serving``'s normal end)."""
+    loop = asyncio.get_running_loop()
+    stopped = asyncio.Event()
+    for signum in STOP_SIGNALS:  # before saying so: a signal from then on is handled
+        loop.add_signal_handler(signum, stopped.set)
+    try:
+        print(ready, file=out, flush=True)
+        await stopped.wait()
+    finally:
+        for signum in STOP_SIGNALS:
+            loop.remove_signal_handler(signum)
+
+
+def _keep_serving(live: LiveView, out: TextIO) -> None:
+    """Serve on after the walk, until Ctrl-C or SIGTERM."""
+    url = f"ws://{live.host}:{live.port}"
+    run_scaled(
+        _until_signal,
+        f"\nthe walk is over; still serving the live view on {url}: Ctrl-C stops",
+        out,
+    )
+    print(f"stopped serving {url}", file=out, flush=True)
+
+
+def _problem(options: argparse.Namespace) -> str | None:
+    """What is wrong with the options that argparse cannot tell, in words; None if nothing."""
+    if options.keep_serving and options.serve is None:
+        return "--keep-serving keeps the live view of --serve up: add --serve (or --serve PORT)"
+    record = options.record
+    return unwritable("--record", record, f"walk{Path(record).suffix}") if record else None
+
+
 def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     """Run the demo; return the exit code."""
-    record = options.record
-    problem = unwritable("--record", record, f"walk{Path(record).suffix}") if record else None
+    problem = _problem(options)
     if problem is not None:  # before the simulation: a typo costs no run
         print(f"pyrobots-aio: error: {problem}", file=err)
         return 2
     from pyrobots_aio.sim import run  # first: without the sim extra, fail before writing files
 
+    live = LiveView(options.serve) if options.keep_serving else None
+    try:
+        _run(options, out, run, live)
+        if live is not None:
+            _keep_serving(live, out)
+    finally:
+        if live is not None:
+            live.stop()
+    return 0
+
+
+def _run(
+    options: argparse.Namespace,
+    out: TextIO,
+    run: Callable[[Callable[[], Coroutine[Any, Any, WalkReport]]], WalkReport],
+    live: LiveView | None,
+) -> None:
+    """Walk, then print the report and the recording's summary."""
     recorder = _recorder(options)
     show = _Show(out, options.log_handler, per_action=options.per_action or options.verbose)
     stopping = stop_on_signals()
     try:
-        main = _walk(options, recorder, show, stopping)
+        main = _walk(options, recorder, show, stopping, live)
         report = run_scaled(main) if options.realtime else run(main)
     except asyncio.CancelledError:
         if show.pipe_closed:
@@ -330,4 +397,3 @@ def run_random_walk(options: argparse.Namespace, out: TextIO, err: TextIO) -> in
         page = Path(options.record).with_suffix(".html")
         replay = f"pyrobots-aio replay {options.record} --timeline {page}"
         print(f"\nrecorded to {options.record}; see its timeline with: {replay}", file=out)
-    return 0

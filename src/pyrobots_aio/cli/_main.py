@@ -56,7 +56,7 @@ def parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run ``pyrobots-aio`` with ``argv`` (default: ``sys.argv[1:]``); return the exit code.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.cli import main
         >>> main(["replay", "run.jsonl", "--timeline", "run.html"])  # doctest: +SKIP
         0

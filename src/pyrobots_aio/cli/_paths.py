@@ -13,7 +13,7 @@ def unwritable(option: str, path: str, example: str) -> str | None:
 
     ``example`` is a file name suggested inside ``path`` when it is a directory.
 
-    Example:
+    Examples:
         >>> print(unwritable("--record", "no/x.jsonl", "walk.jsonl"))
         --record no/x.jsonl: the directory no does not exist: create it first, or choose another
     """

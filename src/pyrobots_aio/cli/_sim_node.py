@@ -99,7 +99,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "sim-node",
         help="run the simulated robot as a ROS 2 node",
         description="Run the simulated robot as a ROS 2 node: cmd_vel in; odom, IR ranges, "
-        "bumper, cliff and dock state out (see the README's ROS 2 section for the topics). "
+        "bumper, cliff and dock state out (docs/guides/ros2.md lists the topics). "
         "Needs the ros2 and sim extras. Ctrl-C stops it.",
     )
     node.add_argument("--name", default="sim_node", help="the node's name (default: sim_node)")

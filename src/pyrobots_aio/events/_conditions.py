@@ -55,7 +55,7 @@ class Conditions(TypedDict, total=False):
         held_for: Seconds the condition must hold before it fires; combines
             with any one of the others, or with a predicate.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot
         >>> async def main() -> list[float]:

@@ -20,7 +20,7 @@ from ._watch import Feed, Watch, check_buffer
 
 if TYPE_CHECKING:
     from .._core._instrument import Instruments
-    from ..actions import Executive
+    from ..actions._executive import Executive
     from ..state import StateStore
 
 Predicate = Callable[[Any], object]
@@ -96,7 +96,7 @@ class EventManager:
             UnknownStateKeyError: ``var`` is not a state key (the closest are listed).
             RobotNotRunningError: The robot is not running.
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot
             >>> async def main() -> list[float]:
@@ -121,7 +121,7 @@ class EventManager:
     ) -> EventMonitor:
         """Like `whenever`, but fire once, then stop monitoring (a one-shot monitor).
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot
             >>> async def main() -> int:
@@ -171,7 +171,7 @@ class EventManager:
             ValueError: ``buffer`` is not a positive int.
             RobotNotRunningError: The robot is not running.
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot
             >>> async def main() -> list[bool]:

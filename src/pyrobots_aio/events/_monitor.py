@@ -48,7 +48,7 @@ class EventMonitor:
     chained to the creation have run; firings before ``.do()`` run no
     callback (they still wake `wait`).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot
         >>> async def main() -> list[str]:

@@ -8,27 +8,24 @@
 - **Scaled time**: `ScaledTimeLoop` runs ``rate`` times faster than the wall
   clock. `run_scaled(main, *args, rate=R)` runs a program at the pace of a
   ``pyrobots-aio sim-node --rate R``.
-- Each closes safely under signals: `SignalSafeLoop` (rate 1 is one).
+- Each closes safely under signals (rate 1 too): a second Ctrl-C while the
+  loop closes is never written to a closed pipe.
 
 Layer: right above ``_core``; ``sim``, ``ros2``, ``cli`` and ``testing`` all
 use it, and it imports none of them.
 """
 
-from ._closing import SignalSafeLoop as SignalSafeLoop
 from ._scaled import ScaledTimeLoop as ScaledTimeLoop
 from ._scaled import run_scaled as run_scaled
 from ._scaled import scaled_loop as scaled_loop
 from ._virtual import VirtualTimeLoop as VirtualTimeLoop
-from ._virtual import VirtualTimePolicy as VirtualTimePolicy
 from ._virtual import is_virtual as is_virtual
 from ._virtual import new_virtual_loop as new_virtual_loop
 from ._virtual import run_lockstep as run_lockstep
 
 __all__ = [
     "ScaledTimeLoop",
-    "SignalSafeLoop",
     "VirtualTimeLoop",
-    "VirtualTimePolicy",
     "is_virtual",
     "new_virtual_loop",
     "run_lockstep",

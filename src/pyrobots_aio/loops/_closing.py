@@ -19,7 +19,7 @@ import threading
 class SignalSafeLoop(asyncio.SelectorEventLoop):
     """An ``asyncio.SelectorEventLoop`` whose ``close`` resets the signal wake-up first.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> loop = SignalSafeLoop()
         >>> loop.run_until_complete(asyncio.sleep(0, "done"))

@@ -79,7 +79,7 @@ def run_scaled(
     program's seconds — ``robot.time()``, ``robot.sleep``, timeouts, a
     `Ros2Robot`'s ``odom_timeout`` — simulated seconds too.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> async def main() -> float:
         ...     loop = asyncio.get_running_loop()

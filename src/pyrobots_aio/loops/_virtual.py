@@ -112,7 +112,7 @@ class VirtualTimeLoop(SignalSafeLoop):
     then it jumps to the next timer's due time. Not thread-safe beyond what
     asyncio guarantees (``call_soon_threadsafe`` works as usual).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> async def main() -> float:
         ...     await asyncio.sleep(3600)
@@ -171,7 +171,7 @@ class VirtualTimeLoop(SignalSafeLoop):
         What the loop will wake up for if nothing else happens: a program that
         costs no CPU while idle leaves none behind.
 
-        Example:
+        Examples:
             >>> async def main() -> list[float]:
             ...     loop = asyncio.get_running_loop()
             ...     loop.call_later(2.0, lambda: None)
@@ -186,7 +186,7 @@ class VirtualTimeLoop(SignalSafeLoop):
     def ready_callbacks(self) -> list[asyncio.Handle]:
         """Return the callbacks queued to run at the next iteration (cancelled ones left out).
 
-        Example:
+        Examples:
             >>> async def main() -> int:
             ...     loop = asyncio.get_running_loop()
             ...     loop.call_soon(lambda: None)
@@ -207,7 +207,7 @@ class VirtualTimeLoop(SignalSafeLoop):
         runs and the loop is not stopping. The loop's turn in between would have
         done nothing but poll I/O (the caller must let it turn now and then).
 
-        Example:
+        Examples:
             >>> async def main() -> tuple[bool, float, bool]:
             ...     loop = asyncio.get_running_loop()
             ...     skipped = loop.skip_ahead(1.0)  # nothing else to do before t = 1
@@ -264,7 +264,7 @@ class VirtualTimeLoop(SignalSafeLoop):
 def new_virtual_loop() -> VirtualTimeLoop:
     """Create a new `VirtualTimeLoop`: a ``loop_factory`` for runners and test plugins.
 
-    Example:
+    Examples:
         >>> import anyio
         >>> async def now() -> float:
         ...     await anyio.sleep(2.5)
@@ -309,7 +309,7 @@ def run_lockstep(main: Callable[[*_Ts], Coroutine[Any, Any, _T]], *args: *_Ts) -
         EventLoopError: An event loop is already running in this thread (a
             ``RuntimeError``); the message says to use ``asyncio.to_thread``.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> async def later(delay: float) -> float:
         ...     await asyncio.sleep(delay)

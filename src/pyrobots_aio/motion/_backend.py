@@ -35,7 +35,7 @@ class DriveBackend(Backend, Protocol):
       the books); ``control_period`` is the seconds between two updates;
     - ``frames`` places ``odom``, ``base_link`` and ``dock`` for ``robot.poses``.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.testing import FakeBase
         >>> isinstance(FakeBase().backend, DriveBackend)
         True

@@ -97,7 +97,7 @@ class DriveBase(Robot):
             `STALL_TIMEOUT`, 1.5 s; `stall_timeout` changes it later).
         **options: `Robot` options (``instruments``, ``max_actions`` ...).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import run
         >>> from pyrobots_aio.testing import FakeBase
         >>> async def main() -> float:

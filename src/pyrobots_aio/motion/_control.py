@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 class Controllers:
     """The ``step`` functions waiting for a base's next sensor updates.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> async def main() -> int:
         ...     controllers, calls = Controllers(), []

@@ -35,7 +35,7 @@ def checked(
     ``bound``: the largest magnitude allowed, if any; ``fix``: what the message
     suggests.
 
-    Example:
+    Examples:
         >>> checked("speed", 0.2, positive=True)
         0.2
     """
@@ -51,7 +51,7 @@ def wrap_angle(angle: float) -> float:
 def ramp(remaining: float, top: float, floor: float) -> float:
     """Speed toward a goal ``remaining`` away: full speed, slowing down near it.
 
-    Example:
+    Examples:
         >>> ramp(1.0, 0.2, 0.03), ramp(-0.01, 0.2, 0.03)
         (0.2, -0.03)
     """
@@ -66,7 +66,7 @@ def limit_speeds(v: float, w: float, half_track: float, top: float) -> tuple[flo
     work, up to ``1.7e308``: the wheel speeds are worked out at a unit scale
     first, so nothing overflows into infinity or NaN.
 
-    Example:
+    Examples:
         >>> limit_speeds(0.2, 0.0, 0.1175, 0.306), limit_speeds(1.7e308, 0.0, 0.1175, 0.306)
         ((0.2, 0.0), (0.306, 0.0))
     """

@@ -44,7 +44,7 @@ class Sensor:
     Raises:
         ValueError: An empty key, or a range without a positive finite reach.
 
-    Example:
+    Examples:
         >>> Sensor("ir_back", SensorKind.RANGE, reach=0.4, bearing=math.pi).resting
         0.4
     """

@@ -11,14 +11,10 @@ simulator's provider, anything with ``get_transform(frame)`` and
 from ._frames import FrameProvider as FrameProvider
 from ._frames import FrameTree as FrameTree
 from ._manager import PoseManager as PoseManager
-from ._math import EDGE_TOLERANCE as EDGE_TOLERANCE
-from ._math import UNIT_TOLERANCE as UNIT_TOLERANCE
 from ._parse import PoseLike as PoseLike
 from ._pose import Pose as Pose
 
 __all__ = [
-    "EDGE_TOLERANCE",
-    "UNIT_TOLERANCE",
     "FrameProvider",
     "FrameTree",
     "Pose",

@@ -20,7 +20,7 @@ MAP = "map"
 class FrameProvider(Protocol):
     """A source of frames, placed in ``map`` (TF's broadcasters, the simulator).
 
-    Example:
+    Examples:
         >>> class Fixed:
         ...     def get_transform(self, frame: str) -> Matrix:
         ...         if frame != "charger":
@@ -69,7 +69,7 @@ class FrameTree:
     `PoseManager` it is added to; on its own, the tree raises
     `UnknownFrameError` for it.
 
-    Example:
+    Examples:
         >>> tree = FrameTree()
         >>> tree.set_transform("map", "odom", (0.0, 0.0, 0.0))
         >>> tree.set_transform("odom", "base_link", (1.0, 2.0, 0.0))
@@ -176,7 +176,7 @@ class FrameTree:
     def has(self, frame: str) -> bool:
         """Whether ``frame`` is ``map`` or has a parent in this tree (`resolve` takes it).
 
-        Example:
+        Examples:
             >>> tree = FrameTree()
             >>> tree.set_transform("base_link", "arm", (0.1, 0.0, 0.3))
             >>> tree.has("arm"), tree.has("map"), tree.has("gripper")

@@ -31,7 +31,7 @@ class PoseManager:
     Args:
         *providers: Frame providers to add, in order.
 
-    Example:
+    Examples:
         >>> tree = FrameTree()
         >>> tree.set_transform("map", "base_link", (1.0, 0.0, 0.0))
         >>> poses = PoseManager(tree)
@@ -123,7 +123,7 @@ class PoseManager:
         Raises:
             UnknownFrameError: No provider knows ``frame``.
 
-        Example:
+        Examples:
             >>> poses = PoseManager()
             >>> tree = FrameTree()
             >>> tree.set_transform("map", "base_link", (1.0, 2.0, 0.0, 0.0, 0.0, 0.5))
@@ -178,7 +178,7 @@ class PoseManager:
             InvalidPoseError: ``raw`` is none of these, or holds a bad value.
             UnknownFrameError: The pose's frame is unknown to every provider.
 
-        Example:
+        Examples:
             >>> PoseManager().get((1, 2, 0, 0, 0, 0, 1))
             Pose(x=1.0, y=2.0, z=0.0, qx=0.0, qy=0.0, qz=0.0, qw=1.0, frame='map')
         """
@@ -189,7 +189,7 @@ class PoseManager:
     def inframe(self, pose: PoseLike, frame: str) -> Pose:
         """Return ``pose`` expressed in ``frame``.
 
-        Example:
+        Examples:
             >>> PoseManager().inframe("map", "map")
             Pose(x=0.0, y=0.0, z=0.0, qx=0.0, qy=0.0, qz=0.0, qw=1.0, frame='map')
         """
@@ -222,7 +222,7 @@ class PoseManager:
         ``pan`` then pitch ``tilt`` makes it point at the target. A target at
         ``ref``'s origin gives (0, 0); straight above, (0, -π/2).
 
-        Example:
+        Examples:
             >>> PoseManager().pantilt((0, 1, 0), ref="map")  # one metre to the left
             (1.5707963267948966, 0.0)
         """
@@ -239,7 +239,7 @@ class PoseManager:
     def normalize_angle(angle: float) -> float:
         """Return ``angle`` (radians) wrapped into (-π, π]; -π becomes π.
 
-        Example:
+        Examples:
             >>> PoseManager.normalize_angle(-math.pi) == math.pi
             True
         """
@@ -251,7 +251,7 @@ class PoseManager:
 
         Positive means counter-clockwise; the shorter way round is chosen.
 
-        Example:
+        Examples:
             >>> round(PoseManager.angular_distance(3.0, -3.0), 6)  # 2π - 6, across ±π
             0.283185
         """
@@ -272,7 +272,7 @@ class PoseManager:
         Raises:
             InvalidPoseError: A malformed point or polygon.
 
-        Example:
+        Examples:
             >>> PoseManager.isin((1, 1), [(0, 0), (2, 0), (2, 2), (0, 2)])
             True
         """
@@ -285,7 +285,7 @@ class PoseManager:
 
         Same order as `Pose`'s fields and ROS ``quaternion_from_euler``.
 
-        Example:
+        Examples:
             >>> [round(c, 6) for c in PoseManager.quaternion_from_euler(0, 0, math.pi)]
             [0.0, 0.0, 1.0, 0.0]
         """

@@ -59,7 +59,7 @@ class Pose:
         InvalidPoseError: A field is not a finite number, the quaternion is
             zero or not unit, or the frame is not a non-empty string.
 
-    Example:
+    Examples:
         >>> p = Pose(1.0, 2.0, 0.0, frame="odom")
         >>> p.position().tolist(), p.quat_wxyz().tolist()
         ([1.0, 2.0, 0.0], [1.0, 0.0, 0.0, 0.0])
@@ -109,7 +109,7 @@ class Pose:
             InvalidPoseError: The matrix is not 4x4, holds non-finite or
                 non-numeric entries, or is not rigid (see `UNIT_TOLERANCE`).
 
-        Example:
+        Examples:
             >>> import numpy as np
             >>> m = np.eye(4)
             >>> m[:3, 3] = (1.0, 2.0, 3.0)
@@ -137,7 +137,7 @@ class Pose:
         ``sxyz``: rotate by ``rx`` about the fixed x axis, then ``ry`` about the
         fixed y axis, then ``rz`` about the fixed z axis (roll, pitch, yaw).
 
-        Example:
+        Examples:
             >>> p = Pose.from_euler(0, 0, 0, 0, 0, math.pi / 2)
             >>> [round(c, 6) for c in p.quat_xyzw().tolist()]
             [0.0, 0.0, 0.707107, 0.707107]
@@ -155,7 +155,7 @@ class Pose:
     ) -> Pose:
         """Build a pose from a position and a w-first quaternion (MuJoCo, transforms3d).
 
-        Example:
+        Examples:
             >>> Pose.from_wxyz([1, 0, 0], [1, 0, 0, 0]).x
             1.0
         """
@@ -196,7 +196,7 @@ class Pose:
         Positions and quaternion components are compared component-wise;
         ``q`` and ``-q`` count as the same rotation.
 
-        Example:
+        Examples:
             >>> Pose(qw=1.0).isclose(Pose(qw=-1.0))
             True
         """

@@ -45,6 +45,7 @@ def rate_chart(recording: Recording, found: Analysis, scale: Scale) -> str:
     actions = per_bucket((s.spawned for s in found.spans.values()), start, duration, width)
     events = per_bucket((e.time for e in found.firings), start, duration, width)
     parts, ceiling = _svg.bar_chart_axis(TOP, HEIGHT, max(*actions, *events))
+    bars: list[str] = []
     for i, (a, e) in enumerate(zip(actions, events, strict=True)):
         left, right = scale.x(start + i * width), scale.x(start + min(duration, (i + 1) * width))
         bar = max(1.0, (right - left) / 2 - 1)
@@ -55,8 +56,9 @@ def rate_chart(recording: Recording, found: Analysis, scale: Scale) -> str:
         ):
             h = count / ceiling * HEIGHT
             title = f"{span}: {count} {what}"
-            parts.append(_svg.rect(cls, (left + offset, TOP + HEIGHT - h, bar, h), title))
+            bars.append(_svg.rect(cls, (left + offset, TOP + HEIGHT - h, bar, h), title))
     bottom = TOP + HEIGHT
+    parts.append(_svg.zoomable(bottom, bars))
     parts += _svg.time_axis(scale, bottom, label_y=bottom + 16, top=TOP)
     legend_y = bottom + 34
     parts.append(

@@ -32,7 +32,7 @@ def shown(text: object) -> str:
     lone surrogates (``"\ud800"``, valid JSON but no text) are escaped too,
     since they cannot be written out as UTF-8.
 
-    Example:
+    Examples:
         >>> shown("drive\x1b[2J")
         'drive\\x1b[2J'
     """
@@ -153,7 +153,7 @@ def _listing(title: str, lines: Sequence[str]) -> list[str]:
 def format_summary(summary: Summary) -> str:
     """The summary as a readable plain-text report (what ``pyrobots-aio replay`` prints).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.recording import MemoryRecorder, format_summary, summarize
         >>> print(format_summary(summarize(MemoryRecorder().recording())))
         unknown robot: 0.000 s recorded, 0 events, NOT closed (incomplete)

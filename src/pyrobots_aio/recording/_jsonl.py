@@ -343,7 +343,7 @@ class JsonlRecorder(Recorder[JsonlSink]):
         buffer_size: Lines buffered before a write.
         flush_interval: Loop seconds after which buffered lines are written anyway.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot, action
         >>> from pyrobots_aio.recording import JsonlRecorder, load

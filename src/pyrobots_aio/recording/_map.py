@@ -3,11 +3,17 @@
 Drawn from the recording alone: the arena from the header's floor plan (the
 MuJoCo model's static geoms, recorded by a simulated robot's recorder), to
 scale with a scale bar; the path from the recorded poses, coloured by time
-(`_svg.ramp`); marks for bumps, cliffs, preemptions, undocking and docking at
-the pose of their moment. Everything is in pixels: ``data-ox``, ``data-oy``
+(`_svg.ramp`), with arrows along it for the robot's heading; marks for bumps,
+cliffs, preemptions, undocking, docking and the disturbances an exploration
+dealt (the ``disturbance`` state key that `pyrobots_aio.testing.explore` writes
+at each hit) at the pose of their moment. Marks of one kind closer than
+`CLUSTER_PX` are drawn once with their count (a robot bumps into the same
+corner again and again), and the kinds sit a little apart, so that none hides
+another. Everything is in pixels: ``data-ox``, ``data-oy``
 and ``data-scale`` on the ``svg.map`` give the map frame back
 (``x = (px - ox) / scale``, ``y = (oy - py) / scale``), and ``data-track``
-holds the path as ``t,x,y`` triples for the page's hover script.
+holds the path as ``t,x,y,yaw`` quadruples for the page's hover script, which
+draws the robot's heading at the cursor's moment.
 
 Coordinates are drawn within `REACH` of the origin: a pose beyond (a
 simulation that blew up, a crafted file) is drawn at that distance, and a
@@ -18,6 +24,7 @@ map's arithmetic stays finite (a pose at 1e308 m would make the scale 0).
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 from array import array
 from dataclasses import dataclass, replace
@@ -41,6 +48,15 @@ MAX_TRACK = 3000
 """Most ``t,x,y`` triples given to the hover script."""
 REACH = 1e9
 """Metres from the origin drawn (see the module notes)."""
+CLUSTER_PX = 10.0
+"""Marks of one kind within this many pixels of a drawn one join it (and its count)."""
+ARROW_EVERY_PX = 60.0
+"""Pixels of path between two of its heading arrows."""
+MAX_ARROWS = 60
+ARROW = "M-4,-4 L3,0 L-4,4"
+"""A chevron pointing along +x (the heading, once rotated)."""
+ARROW_HEAD = "M9,-5 L15,0 L9,5"
+"""The tip of the cursor's heading arrow, a line from the robot along +x."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,12 +76,13 @@ def _number(value: object) -> float | None:
 
 
 def _within_reach(poses: PoseTrack) -> PoseTrack:
-    """``poses`` with each coordinate brought within `REACH` of the origin."""
+    """``poses`` with each coordinate brought within `REACH` of the origin, each yaw within ±pi."""
 
     def near(values: Sequence[float]) -> array[float]:
         return array("d", [min(REACH, max(-REACH, value)) for value in values])
 
-    return replace(poses, x=near(poses.x), y=near(poses.y))
+    yaw = array("d", [math.remainder(value, math.tau) for value in poses.yaw])
+    return replace(poses, x=near(poses.x), y=near(poses.y), yaw=yaw)
 
 
 def _shape(raw: Mapping[str, Any]) -> dict[str, Any] | None:
@@ -191,7 +208,7 @@ def _rising(times: Sequence[float], values: Sequence[object]) -> Iterable[tuple[
 
 
 def marks(recording: Recording, found: Analysis) -> list[Mark]:
-    """Bumps, cliffs, preemptions, undocking and docking, in time order."""
+    """Bumps, cliffs, preemptions, undocking, docking and disturbances, in time order."""
     found_marks: list[Mark] = []
     bumper = recording.samples.get("bumper")
     if bumper is not None:
@@ -212,6 +229,12 @@ def marks(recording: Recording, found: Analysis) -> list[Mark]:
         found_marks += [
             Mark("dock" if v else "undock", t, "docked" if v else "undocked")
             for t, v in _rising(docked.times, docked.values)
+        ]
+    dealt = recording.samples.get("disturbance")
+    if dealt is not None:
+        found_marks += [
+            Mark("disturbance", t, f"disturbance: {v}")
+            for t, v in zip(dealt.times, dealt.values, strict=True)
         ]
     for event in found.preemptions:
         victim = found.label(event.action) or "?"
@@ -244,22 +267,106 @@ _SYMBOLS = {
     "preempt": "M-5,-7 h10 l-5,8 z",
     "dock": "M-5,-5 h10 v10 h-10 z",
     "undock": "M-5,-5 h10 v10 h-10 z",
+    "disturbance": "M0,-8 L8,0 L0,8 L-8,0 Z",
 }
+_OFFSETS = {
+    "bump": (0, 0),
+    "cliff": (-9, 9),
+    "preempt": (9, -9),
+    "dock": (0, 0),
+    "undock": (9, 9),
+    "disturbance": (-9, -9),
+}
+"""Where each kind sits from the robot, in pixels: a preemption at a bump stays in sight."""
+MAX_LISTED = 8
+"""Most moments a mark's tooltip lists."""
+
+
+@dataclass(slots=True)
+class _Cluster:
+    """Marks of one kind drawn as one, at the place of the first."""
+
+    kind: str
+    px: float
+    py: float
+    marks: list[Mark]
+
+
+def _clusters(placed: Iterable[tuple[Mark, float, float]]) -> list[_Cluster]:
+    """Group marks of a kind within `CLUSTER_PX` of a group's first, in time order.
+
+    Groups are found through a grid of `CLUSTER_PX` cells (a mark looks in its
+    cell and the eight around it), so that thousands of marks stay linear.
+    """
+    grid: dict[tuple[str, int, int], list[_Cluster]] = {}
+    found: list[_Cluster] = []
+    for mark, px, py in placed:
+        i, j = math.floor(px / CLUSTER_PX), math.floor(py / CLUSTER_PX)
+        near = (
+            c
+            for di in (-1, 0, 1)
+            for dj in (-1, 0, 1)
+            for c in grid.get((mark.kind, i + di, j + dj), ())
+            if math.hypot(c.px - px, c.py - py) <= CLUSTER_PX
+        )
+        cluster = next(near, None)
+        if cluster is None:
+            cluster = _Cluster(mark.kind, px, py, [])
+            grid.setdefault((mark.kind, i, j), []).append(cluster)
+            found.append(cluster)
+        cluster.marks.append(mark)
+    return found
+
+
+def _cluster_title(cluster: _Cluster, start: float) -> str:
+    listed = [f"{m.text} at {m.time - start:.3f} s" for m in cluster.marks[:MAX_LISTED]]
+    more = len(cluster.marks) - MAX_LISTED
+    if more > 0:
+        listed.append(f"and {more} more")
+    if len(cluster.marks) > 1:
+        listed.insert(0, f"{len(cluster.marks)} times here:")
+    return "\n".join(listed)
 
 
 def _draw_marks(frame: _Frame, recording: Recording, found: Analysis) -> list[str]:
     parts = ['<g class="marks">']
     start = recording.start
-    for mark in marks(recording, found):
-        where = _pose_at(recording, mark.time)
-        if where is None:
-            continue
-        px, py = frame.px(*where)
-        t = mark.time - start
+    placed = [
+        (mark, *frame.px(*where))
+        for mark in marks(recording, found)
+        if (where := _pose_at(recording, mark.time)) is not None
+    ]
+    for cluster in _clusters(placed):
+        dx, dy = _OFFSETS[cluster.kind]
+        px, py, count = cluster.px + dx, cluster.py + dy, len(cluster.marks)
         parts.append(
-            f'<path class="mark {mark.kind}" transform="translate({px:.1f},{py:.1f})" '
-            f'd="{_SYMBOLS[mark.kind]}" data-t="{t:.3f}">'
-            f"<title>{esc(mark.text)} at {t:.3f} s</title></path>"
+            f'<path class="mark {cluster.kind}" transform="translate({px:.1f},{py:.1f})" '
+            f'd="{_SYMBOLS[cluster.kind]}" data-t="{cluster.marks[0].time - start:.3f}" '
+            f'data-count="{count}"><title>{esc(_cluster_title(cluster, start))}</title></path>'
+        )
+        if count > 1:
+            parts.append(f'<text class="count" x="{px + 7:.1f}" y="{py - 5:.1f}">{count}</text>')
+    parts.append("</g>")
+    return parts
+
+
+def _headings(frame: _Frame, recording: Recording, kept: list[int]) -> list[str]:
+    """Chevrons along the path, every `ARROW_EVERY_PX` pixels, pointing where the robot faced."""
+    poses, start = recording.poses, recording.start
+    places = [frame.px(poses.x[i], poses.y[i]) for i in kept]
+    steps = [math.dist(a, b) for a, b in itertools.pairwise(places)]
+    every = max(ARROW_EVERY_PX, sum(steps) / MAX_ARROWS)
+    parts, travelled = ['<g class="headings">'], 0.0
+    for i, (px, py), step in zip(kept[1:], places[1:], steps, strict=True):
+        travelled += step
+        if travelled < every:
+            continue
+        travelled = 0.0
+        yaw = math.degrees(poses.yaw[i])
+        parts.append(
+            f'<path class="heading" transform="translate({px:.1f},{py:.1f}) rotate({-yaw:.0f})" '
+            f'd="{ARROW}"><title>heading {yaw:.0f} degrees at {poses.times[i] - start:.1f} s'
+            "</title></path>"
         )
     parts.append("</g>")
     return parts
@@ -285,7 +392,8 @@ def _track(recording: Recording, kept: list[int]) -> str:
     if kept and picked[-1] != kept[-1]:
         picked.append(kept[-1])
     return ";".join(
-        f"{poses.times[i] - start:.3f},{poses.x[i]:.4f},{poses.y[i]:.4f}" for i in picked
+        f"{poses.times[i] - start:.3f},{poses.x[i]:.4f},{poses.y[i]:.4f},{poses.yaw[i]:.3f}"
+        for i in picked
     )
 
 
@@ -300,6 +408,7 @@ def render_map(recording: Recording, found: Analysis) -> str:
     kept = _kept(frame, recording)
     parts = ['<g class="arena">', *(_draw_shape(frame, s) for s in shapes), "</g>"]
     parts += _trail(frame, recording, kept)
+    parts += _headings(frame, recording, kept)
     parts += _draw_marks(frame, recording, found)
     if kept:
         px, py = frame.px(recording.poses.x[kept[0]], recording.poses.y[kept[0]])
@@ -307,6 +416,9 @@ def render_map(recording: Recording, found: Analysis) -> str:
             f'<circle class="start" cx="{px:.1f}" cy="{py:.1f}" r="4"><title>start</title></circle>'
         )
     parts.append('<circle class="here" cx="-99" cy="-99" r="7"/>')
+    parts.append(
+        f'<path class="here-heading" transform="translate(-99,-99)" d="M0,0 h14 {ARROW_HEAD}"/>'
+    )
     parts.append(_scale_bar(frame))
     return (
         f'<svg class="map" xmlns="http://www.w3.org/2000/svg" '

@@ -5,8 +5,11 @@ executive's events on ``/pyrobots/actions``, ``/pyrobots/resources`` and
 ``/pyrobots/monitors`` (JSON schema ``pyrobots_aio.ExecEvent``), each state key
 on ``/pyrobots/state/<key>`` (plot ``.value``), the pose on ``/pyrobots/pose``
 (``foxglove.PoseInFrame``), ``map`` -> ``base_link`` on ``/tf``
-(``foxglove.FrameTransforms``), and notable events and the library's log
-records on ``/pyrobots/log`` (``foxglove.Log``). Every message is strict JSON.
+(``foxglove.FrameTransforms``), notable events and the library's log records
+on ``/pyrobots/log`` (``foxglove.Log``), and a simulated robot's arena (walls,
+obstacles, dock: the header's floor plan) on ``/pyrobots/arena``
+(``foxglove.SceneUpdate``, once, at the start), for Foxglove's 3D panel.
+Every message is strict JSON.
 The header facts (robot, seed, floor plan ...) are the ``pyrobots_aio``
 metadata record, each value JSON-encoded; ``pyrobots_aio.end`` is written on
 close. `load` reads the file back into the same `Recording` as the JSON Lines
@@ -113,6 +116,8 @@ class McapSink:
         }
         for topic, schema in FIXED_CHANNELS.items():
             self._channel(topic, schema)
+        if header.floor_plan:
+            self._write(self._foxglove.arena(header.floor_plan))
         if self.logs:
             self._forwarder = LogForwarder(self._foxglove, self._write)
             logging.getLogger(LOGGER).addHandler(self._forwarder)
@@ -189,7 +194,7 @@ class McapRecorder(Recorder[McapSink]):
         logs: Also record the records of the ``pyrobots_aio`` logger (those its
             level lets through) on ``/pyrobots/log`` while attached.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import SimRobot
         >>> from pyrobots_aio.recording import McapRecorder
         >>> robot = SimRobot()  # doctest: +SKIP

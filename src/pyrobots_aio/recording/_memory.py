@@ -74,7 +74,7 @@ class MemoryRecorder(Recorder[MemorySink]):
         pose_frame: The frame whose pose in ``map`` is recorded (None: none).
         metadata: Free JSON-friendly facts for the header.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot, action
         >>> from pyrobots_aio.recording import MemoryRecorder, summarize

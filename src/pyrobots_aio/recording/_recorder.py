@@ -18,10 +18,10 @@ import datetime
 import logging
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Generic, Protocol, Self, TypeVar
+from typing import TYPE_CHECKING, Generic, Protocol, Self, TypeVar
 
 from pyrobots_aio import RecordingError
-from pyrobots_aio.telemetry import StateSampler
+from pyrobots_aio.telemetry import StateSampler, floor_plan
 
 from ._recording import RecordingHeader
 
@@ -43,13 +43,6 @@ def _loop_time() -> float | None:
 
 def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def floor_plan(robot: Robot) -> list[dict[str, Any]]:
-    """The static shapes of ``robot``'s world, if it has one (``SimRobot.world.floor_plan()``)."""
-    world = getattr(robot, "world", None)
-    plan = getattr(world, "floor_plan", None)
-    return list(plan()) if callable(plan) else []
 
 
 @dataclass(frozen=True, slots=True)
@@ -152,7 +145,7 @@ class Recorder(Generic[SinkT_co]):
         options: What to sample and the header's free facts (default: every
             state key at every change, the pose of ``base_link``).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import ActionFinished, Robot, action
         >>> from pyrobots_aio.recording import MemorySink, Recorder

@@ -585,7 +585,7 @@ def load(path: str | os.PathLike[str], *, strict: bool = True) -> Recording:
             (a FIFO, a device).
         OSError: The file cannot be opened.
 
-    Example:
+    Examples:
         >>> recording = load("run.jsonl")  # doctest: +SKIP
         >>> recording.duration, len(recording.events)  # doctest: +SKIP
         (61.3, 2210)

@@ -265,7 +265,7 @@ def _paused(spans: Iterable[Span], stop: float) -> tuple[int, float, int]:
 def summarize(recording: Recording) -> Summary:
     """Compute the `Summary` of a recording.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.recording import load, summarize
         >>> summary = summarize(load("run.jsonl"))  # doctest: +SKIP
         >>> summary.peak_concurrency, summary.mean_actions_per_minute  # doctest: +SKIP

@@ -78,6 +78,35 @@ def nice_step(span: float, most: int) -> float:
     return float(10 * base)
 
 
+def tick_text(value: float, step: float) -> str:
+    """``value``, a multiple of ``step``, with the decimals ``step`` needs and no float noise.
+
+    ``0.30000000000000004`` on a step of 0.1 reads ``0.3``, zero reads ``0``; a
+    value too large or small for plain decimals reads in three significant
+    digits (``1e+18``).
+    """
+    decimals = max(0, -math.floor(math.log10(step))) if 0 < step < math.inf else 0
+    if decimals > 6 or abs(value) >= 1e9:
+        return f"{value:.3g}"
+    text = f"{value:.{decimals}f}"
+    return "0" if float(text) == 0 else text  # not "-0.0", nor "0.0000"
+
+
+def nice_range(low: float, high: float, most: int) -> tuple[float, float, float]:
+    """``low`` and ``high`` widened to multiples of a 1/2/5 step, at most ``most`` steps apart.
+
+    Returns (bottom, top, step). A constant gets a step of its own size; a
+    range too wide for floats (-1e308 to 1e308) keeps its own ends.
+    """
+    span = high - low or abs(high) or 1.0
+    if math.isfinite(span):
+        step = nice_step(span, most)
+        bottom, top = math.floor(low / step) * step, math.ceil(high / step) * step
+        if math.isfinite(top):
+            return bottom, max(top, bottom + step), step
+    return low, high, high / 2 - low / 2 or 1.0
+
+
 @dataclass(frozen=True, slots=True)
 class Scale:
     """Maps loop time to x pixels over the plot area."""
@@ -100,16 +129,20 @@ def ticks(scale: Scale) -> list[tuple[float, str]]:
     """The x of each time tick and its label (seconds since the start), at most 13."""
     step = nice_step(scale.duration, 12)
     count = int(scale.duration // step) + 1 if 0 < scale.duration < math.inf else 1
-    return [(scale.x(scale.start + i * step), f"{i * step:g}") for i in range(count)]
+    return [(scale.x(scale.start + i * step), tick_text(i * step, step)) for i in range(count)]
 
 
 def time_axis(
     scale: Scale, height: float, label_y: float = 16, top: float = AXIS_H - 6
 ) -> list[str]:
-    """Tick labels (seconds since the start) at ``label_y`` and grid lines down to ``height``."""
+    """Tick labels (seconds since the start) at ``label_y`` and grid lines down to ``height``.
+
+    The page's zoom draws them again for the time it shows, from the group's ``data-`` attributes.
+    """
     parts = [
-        f'<g class="axis"><text x="{LABEL_W - 8}" y="{label_y:.0f}" text-anchor="end">'
-        "seconds since start</text>"
+        f'<g class="axis time" data-label-y="{label_y:.0f}" data-top="{top:.1f}" '
+        f'data-bottom="{height:.1f}"><text x="{LABEL_W - 8}" y="{label_y:.0f}" '
+        'text-anchor="end">seconds since start</text>'
     ]
     for x, label in ticks(scale):
         parts.append(f'<text x="{x:.1f}" y="{label_y:.0f}" text-anchor="middle">{label}</text>')
@@ -158,6 +191,14 @@ def cursor_marks(top: float, bottom: float, label_y: float) -> str:
     return (
         f'<line class="cursor" x1="0" y1="{top:.1f}" x2="0" y2="{bottom:.1f}" '
         f'style="display:none"/><text class="cursor-time" x="-99" y="{label_y:.1f}"></text>'
+    )
+
+
+def zoomable(height: float, parts: list[str]) -> str:
+    """``parts`` in a viewport over the plot area: the page's zoom moves them, it clips them."""
+    return (
+        f'<svg class="zoom" x="{LABEL_W}" y="0" width="{PLOT_W}" height="{height:.0f}" '
+        f'viewBox="{LABEL_W} 0 {PLOT_W} {height:.0f}">' + "".join(parts) + "</svg>"
     )
 
 

@@ -14,20 +14,26 @@ Top to bottom:
   own tooltip; instances of one path that overlap take extra lanes. Below:
   each resource's holds (coloured by holder, named in the legend), waits and
   preemptions; monitor firings; boolean state; then **plots** of ``v``,
-  ``w``, each IR range and the bumper (`_plots`);
+  ``w``, each IR range, the bumper, and the cliffs, battery and encoders
+  when recorded (`_plots`);
 - actions started and events (monitor firings) per bucket of time (figure 2),
-  on the same time axis.
+  on the same time axis;
+- a readout of each plotted value at the cursor, fixed at the window's bottom.
 
 Hovering the path shows the moment on the timeline and plots (a cursor), and
-hovering the timeline shows where the robot was on the map: a small static
-script does it, reading only ``data-`` attributes. Inline CSS, SVG and that
-script; no external asset. Every value taken from the recording is escaped,
-attributes included, and only plain words become class names.
+hovering the timeline shows where the robot was and faced on the map; the
+wheel zooms and a drag pans the time axis of every figure: a small static
+script does it (`_script`), reading only ``data-`` attributes. What each
+figure draws on the time axis sits in a nested ``svg.zoom`` over its plot
+area (which clips it); labels and y axes stay outside. Inline CSS, SVG and
+that script; no external asset. Every value taken from the recording is
+escaped, attributes included, and only plain words become class names.
 """
 
 from __future__ import annotations
 
 import heapq
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
@@ -36,8 +42,10 @@ from . import _svg
 from ._analysis import NOT_DONE, Analysis, Interval, Pause, Span, analyse, by_resource
 from ._chart import rate_chart
 from ._format import paused
-from ._map import colour_bar, render_map
-from ._plots import ROW, draw_plot, plotted
+from ._map import colour_bar, marks, render_map
+from ._plots import draw_plot, plotted, row_height
+from ._script import MAX_ZOOM
+from ._script import SCRIPT as _SCRIPT
 from ._summary import summarize
 from ._svg import AXIS_H, BAR_H, ROW_H, WIDTH, Scale, cursor_marks, esc, timed_attributes
 
@@ -78,71 +86,26 @@ svg.map { background: #f5f3ee; border: 1px solid #ddd; }
 .mark.preempt { fill: #000; stroke: #fff; stroke-width: 1; }
 .mark.dock { fill: #2e7d32; stroke: #fff; stroke-width: 1; }
 .mark.undock { fill: #fff; stroke: #2e7d32; }
+.mark.disturbance { fill: none; stroke: #6a1b9a; stroke-width: 2; }
 .start { fill: #fff; stroke: #000; } .here { fill: none; stroke: #d50000; stroke-width: 3; }
 .scalebar line { stroke: #000; stroke-width: 2; }
 .legend span { display: inline-block; margin-right: 14px; }
 .legend i { display: inline-block; width: 12px; height: 12px; margin-right: 4px;
   vertical-align: -1px; box-shadow: inset 0 0 0 1px rgba(0, 0, 0, 0.3); }
 .ramp i { width: 8px; margin: 0; box-shadow: none; }
+svg.zoom polyline { vector-effect: non-scaling-stroke; } text.later { display: none; }
+svg.timeline, svg.rates { cursor: crosshair; } svg.dragging { cursor: grabbing; }
+.heading { fill: none; stroke: #37474f; stroke-width: 1.5; opacity: 0.7; }
+.here-heading { fill: none; stroke: #d50000; stroke-width: 3; stroke-linecap: round; }
+text.count { font: bold 11px sans-serif; fill: #000; stroke: #fff; stroke-width: 3px;
+  paint-order: stroke; pointer-events: none; }
+.zoombar { margin: 4px 0; color: #555; } .zoombar .hint { font-size: 12px; }
+.readout { position: fixed; left: 0; right: 0; bottom: 0; padding: 4px 24px;
+  background: rgba(255, 255, 255, 0.95); border-top: 1px solid #bbb; font: 12px/1.5 monospace; }
+.readout span { display: inline-block; margin-right: 16px; white-space: nowrap; }
+body { padding-bottom: 64px; }
 """
 
-_SCRIPT = """
-(function () {
-  var timed = Array.prototype.slice.call(document.querySelectorAll("svg[data-x0]"));
-  var map = document.querySelector("svg.map");
-  if (!timed.length) { return; }
-  var x0 = +timed[0].dataset.x0, w = +timed[0].dataset.w, span = +timed[0].dataset.duration;
-  var track = [], here = null, ox = 0, oy = 0, k = 1;
-  if (map) {
-    here = map.querySelector(".here");
-    ox = +map.dataset.ox; oy = +map.dataset.oy; k = +map.dataset.scale;
-    track = (map.dataset.track || "").split(";").filter(Boolean).map(function (s) {
-      return s.split(",").map(Number);
-    });
-  }
-  function local(svg, ev) {
-    var p = svg.createSVGPoint(); p.x = ev.clientX; p.y = ev.clientY;
-    return p.matrixTransform(svg.getScreenCTM().inverse());
-  }
-  function poseAt(t) {
-    var lo = 0, hi = track.length - 1;
-    while (lo < hi) {
-      var mid = (lo + hi + 1) >> 1;
-      if (track[mid][0] <= t) { lo = mid; } else { hi = mid - 1; }
-    }
-    return track[lo];
-  }
-  function show(t) {
-    var x = x0 + (span > 0 ? t / span * w : 0);
-    timed.forEach(function (svg) {
-      var line = svg.querySelector(".cursor"), label = svg.querySelector(".cursor-time");
-      if (line) { line.setAttribute("x1", x); line.setAttribute("x2", x); line.style.display = ""; }
-      if (label) { label.setAttribute("x", x + 4); label.textContent = t.toFixed(2) + " s"; }
-    });
-    if (here && track.length) {
-      var p = poseAt(t);
-      here.setAttribute("cx", ox + p[1] * k); here.setAttribute("cy", oy - p[2] * k);
-    }
-  }
-  timed.forEach(function (svg) {
-    svg.addEventListener("mousemove", function (ev) {
-      var p = local(svg, ev);
-      if (p.x >= x0 && p.x <= x0 + w) { show((p.x - x0) / w * span); }
-    });
-  });
-  if (map && track.length) {
-    map.addEventListener("mousemove", function (ev) {
-      var p = local(map, ev), x = (p.x - ox) / k, y = (oy - p.y) / k, best = -1, least = 0.09;
-      track.forEach(function (q, i) {
-        var d = (q[1] - x) * (q[1] - x) + (q[2] - y) * (q[2] - y);
-        if (d < least) { least = d; best = i; }
-      });
-      if (best >= 0) { show(track[best][0]); }
-    });
-  }
-})();
-"""
-"""The page's only script: static text, it reads the ``data-`` attributes the page sets."""
 _OUTCOMES = frozenset(_svg.OUTCOME_COLOURS)
 PAUSED_PALE, PAUSED_INK = "#eceff1", "#a7b5bc"
 """The paused hatch: ink stripes on a pale ground, unlike any outcome's plain colour."""
@@ -223,6 +186,9 @@ class _Canvas:
         self.start, self.stop = recording.start, recording.stop
         self.found = found
         self.parts: list[str] = []
+        """Drawn in place: labels, the plots' y axes."""
+        self.timed: list[str] = []
+        """Drawn on the time axis, where the page's zoom moves them."""
         self.y = float(AXIS_H)
         self._hues: dict[str, str] = {}
 
@@ -270,27 +236,32 @@ class _Canvas:
         """A bar on the current row, with a tooltip and ``text`` inside if it fits.
 
         Otherwise ``text`` goes right of the bar when the next ``room`` pixels
-        are free (and is left to the tooltip when they are not). ``least`` is
+        are free, else inside, hidden until the page's zoom makes room (and is
+        left to the tooltip when even `MAX_ZOOM` would not). ``least`` is
         the narrowest bar drawn, in pixels, so that short pulses show.
         ``paused`` spells (begin, end, tooltip) are hatched over the bar, under
         its text (dark when the bar begins paused).
         """
         x, w = self.scale.x(begin), max(least, self.scale.width(begin, end))
-        self.parts.append(_svg.rect(cls, (x, self.y, w, BAR_H), title, fill))
+        self.timed.append(_svg.rect(cls, (x, self.y, w, BAR_H), title, fill))
         for start, stop, about in paused:
             box = (self.scale.x(start), self.y, self.scale.width(start, stop), BAR_H)
-            self.parts.append(_svg.rect("paused", box, about))
+            self.timed.append(_svg.rect("paused", box, about))
         if not text:
             return
         y = self.y + BAR_H - 3
         needed = len(text) * _svg.CHAR_W + 4
+        dark = cls == "wait" or any(start <= begin < stop for start, stop, _ in paused)
+        ink, at = "in dark" if dark else "in", f'x="{x + 2:.1f}" y="{y:.1f}"'
         if w >= needed:
-            dark = cls == "wait" or any(start <= begin < stop for start, stop, _ in paused)
-            ink = "in dark" if dark else "in"
-            self.parts.append(f'<text class="{ink}" x="{x + 2:.1f}" y="{y:.1f}">{esc(text)}</text>')
+            self.timed.append(f'<text class="{ink}" {at}>{esc(text)}</text>')
         elif room - w >= needed + 2 and x + w + needed < WIDTH:
-            self.parts.append(
+            self.timed.append(
                 f'<text class="out" x="{x + w + 3:.1f}" y="{y:.1f}">{esc(text)}</text>'
+            )
+        elif needed / w <= MAX_ZOOM:  # the page's zoom shows it once the bar is that much wider
+            self.timed.append(
+                f'<text class="{ink} later" {at} data-fit="{needed / w:.3f}">{esc(text)}</text>'
             )
 
     def lanes(
@@ -305,7 +276,7 @@ class _Canvas:
 
     def tick(self, cls: str, time: float, title: str) -> None:
         x = self.scale.x(time)
-        self.parts.append(
+        self.timed.append(
             f'<line class="{cls}" x1="{x:.1f}" y1="{self.y:.1f}" x2="{x:.1f}" '
             f'y2="{self.y + BAR_H:.1f}"><title>{esc(title)}</title></line>'
         )
@@ -318,7 +289,7 @@ class _Canvas:
             f'<svg class="timeline" xmlns="http://www.w3.org/2000/svg" '
             f'viewBox="0 0 {WIDTH} {height:.0f}" width="{WIDTH}" height="{height:.0f}" '
             f"{timed_attributes(self.scale)}>{_HATCH}"
-            + "".join([*axis, *self.parts, cursor])
+            + "".join([*axis, *self.parts, _svg.zoomable(height, self.timed), cursor])
             + "</svg>"
         )
 
@@ -443,9 +414,9 @@ def _draw_resources(canvas: _Canvas) -> None:
             canvas.y += ROW_H
         for event in use.preemptions:
             x = canvas.scale.x(event.time)
-            canvas.parts.append(
-                f'<path class="preempt" d="M{x - 5:.1f},{top:.1f} h10 l-5,7 z">'
-                f"<title>{esc(event.reason)}</title></path>"
+            canvas.timed.append(
+                f'<path class="preempt" transform="translate({x:.1f},{top:.1f})" '
+                f'd="M-5,0 h10 l-5,7 z"><title>{esc(event.reason)}</title></path>'
             )
         if use.waits:
             _interval_rows(canvas, use.waits, "wait", "awaited by", "waiting")
@@ -504,8 +475,10 @@ def _draw_plots(canvas: _Canvas, recording: Recording) -> None:
         return
     canvas.section("sensors")
     for one in series:
-        canvas.parts += draw_plot(one, canvas.scale, canvas.y, canvas.stop)
-        canvas.y += ROW
+        fixed, timed = draw_plot(one, canvas.scale, canvas.y, canvas.stop)
+        canvas.parts += fixed
+        canvas.timed += timed
+        canvas.y += row_height(one)
 
 
 def _facts(recording: Recording) -> str:
@@ -546,13 +519,30 @@ def _legend(canvas: _Canvas) -> str:
     return f'<p class="legend">actions: {_swatches(swatches)}</p>{holders}'
 
 
-def _map_legend(recording: Recording) -> str:
-    marks = [("bump", "#d50000"), ("cliff", "#ff6f00"), ("preemption", "#000")]
-    marks += [("docked", "#2e7d32"), ("undocked", "#fff")]
+_MARKS = (
+    ("bump", "bump", "#d50000"),
+    ("cliff", "cliff", "#ff6f00"),
+    ("preempt", "preemption", "#000"),
+    ("dock", "docked", "#2e7d32"),
+    ("undock", "undocked", "#fff"),
+)
+
+
+def _map_legend(recording: Recording, found: Analysis) -> str:
+    counts = Counter(mark.kind for mark in marks(recording, found))
+    swatches = _swatches((f"{name} ({counts[kind]})", colour) for kind, name, colour in _MARKS)
     return (
-        f'<p class="legend">{colour_bar(recording.duration)} '
-        f"{_swatches(marks)}<span>hover the path to see that moment on the timeline</span></p>"
+        f'<p class="legend">{colour_bar(recording.duration)} {swatches}<span>'
+        "a number by a mark: that many, there; arrows: the heading; "
+        "hover the path to see that moment on the timeline</span></p>"
     )
+
+
+_ZOOM_BAR = (
+    '<p class="zoombar"><button type="button" class="reset-zoom">reset zoom</button> '
+    '<span class="view"></span> <span class="hint">wheel over the plots: zoom; drag: pan; '
+    "double-click: reset; the wheel over the labels on the left scrolls the page</span></p>"
+)
 
 
 def _problem(recording: Recording) -> str:
@@ -590,7 +580,7 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
         ``polygon.plot.bool``. Lone surrogates from the recording are
         spelled out as backslash escapes, so that the page can be written as UTF-8.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.recording import load, render_timeline_html
         >>> page = render_timeline_html(load("run.jsonl"))  # doctest: +SKIP
         >>> open("run.html", "w").write(page)  # doctest: +SKIP
@@ -604,7 +594,7 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
     _draw_plots(canvas, recording)
     heading = page_title(recording, title)
     arena = render_map(recording, found)
-    where = ["<h2>Where the robot went</h2>", _map_legend(recording), arena] if arena else []
+    where = ["<h2>Where the robot went</h2>", _map_legend(recording, found), arena] if arena else []
     page = "\n".join(
         [
             "<!DOCTYPE html>",
@@ -616,9 +606,11 @@ def render_timeline_html(recording: Recording, *, title: str | None = None) -> s
             *where,
             "<h2>Timeline of actions, resources and sensors</h2>",
             _legend(canvas),
+            _ZOOM_BAR,
             canvas.svg(),
             "<h2>Actions started and events</h2>",
             rate_chart(recording, found, canvas.scale),
+            '<div class="readout" hidden></div>',
             f"<script>{_SCRIPT}</script>",
             "</body></html>",
             "",

@@ -120,7 +120,7 @@ class ResourceManager(Generic[OwnerT]):
     are cancelled (``preempt=True``) or suspended (``preempt="suspend"``)
     only on request.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot, action
         >>> from pyrobots_aio.actions import lock
@@ -173,7 +173,7 @@ class ResourceManager(Generic[OwnerT]):
         motion however long the motion has waited, unless the program says
         how long a wait is worth. Set it while nothing waits.
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot
             >>> async def main() -> float | None:

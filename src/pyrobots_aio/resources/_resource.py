@@ -37,7 +37,7 @@ class Resource:
             form of a generated one (``resource-<number>``), which could clash
             with an unnamed resource.
 
-    Example:
+    Examples:
         >>> WHEELS = Resource("wheels")
         >>> WHEELS
         Resource('wheels')
@@ -94,7 +94,7 @@ class CompoundResource:
             compound contains itself (a compound part, at any depth, has its
             name), or a plain part, at any depth, has its name (a name clash).
 
-    Example:
+    Examples:
         >>> L_ARM, R_ARM = Resource("l_arm"), Resource("r_arm")
         >>> ARMS = CompoundResource(L_ARM, R_ARM, name="arms")
         >>> [leaf.name for leaf in ARMS.leaves]

@@ -24,7 +24,7 @@ from ..actions import ActionHandle, current_action
 
 if TYPE_CHECKING:
     from .._core._logging import ScopedLogger
-    from ..actions import Executive
+    from ..actions._executive import Executive
     from ..state import StateStore
 
 StopCallback = Callable[[str], Iterable[ActionHandle[Any]]]
@@ -87,7 +87,7 @@ class EmergencyStop:
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(robot.emergency_stop, reason)``).
 
-        Example:
+        Examples:
             >>> from pyrobots_aio import ActionInterrupted, Resource, Robot, action, lock
             >>> from pyrobots_aio.sim import run
             >>> @action

@@ -26,7 +26,7 @@ class StateMethods:
 
         pyRobots' ``robot.filtered``: smooth a noisy reading before acting on it.
 
-        Example:
+        Examples:
             >>> from pyrobots_aio import Robot
             >>> robot = Robot()
             >>> robot.filtered("sonar", 1.0), robot.filtered("sonar", 2.0)
@@ -49,7 +49,7 @@ class StateMethods:
         ``held_for=``), or a predicate ``f(robot) -> bool`` (sync or async).
         See `EventManager.whenever` for every parameter.
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot, action
             >>> @action
@@ -86,7 +86,7 @@ class StateMethods:
     ) -> EventMonitor:
         """Fire once when the condition is met, then stop monitoring (a one-shot monitor).
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot
             >>> async def main() -> list[str]:
@@ -116,7 +116,7 @@ class StateMethods:
         ``decrease``) waits for the next change into it. Callers own the
         deadline: ``async with asyncio.timeout(5): await robot.wait(...)``.
 
-        Example:
+        Examples:
             >>> import asyncio
             >>> from pyrobots_aio import Robot
             >>> async def main() -> float:

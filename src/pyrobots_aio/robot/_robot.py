@@ -26,8 +26,9 @@ from .._core._numbers import finite
 from .._core._signals import SignalStop
 from .._core._waiting import sleep_until
 from .._exceptions import ActionDefinitionError, ActionError, EventLoopError, PyRobotsError
-from ..actions import Action, ActionInfo, BoundAction, Executive, action, current_action
-from ..actions import render_tree as _render_tree
+from ..actions import Action, ActionInfo, BoundAction, action, current_action
+from ..actions._executive import Executive
+from ..actions._info import render_tree as _render_tree
 from ..events import EventManager
 from ..poses import PoseManager
 from ..resources import ResourceManager
@@ -64,7 +65,9 @@ class Robot(StateMethods, EmergencyStop):
         backend: The backend that connects this robot to hardware or a simulator.
         serve: A TCP port: while the robot runs, stream it live on 127.0.0.1 over
             Foxglove's WebSocket protocol (the ``live`` extra); 0 picks a free port,
-            which ``robot.live.port`` tells once the robot runs.
+            which ``robot.live.port`` tells once the robot runs. Or a `LiveView`
+            of your own, which the robot streams to while it runs and leaves
+            serving after (Foxglove stays connected; ``live.stop()`` ends it).
         block_threshold: Seconds the event loop may go without turning before a
             watchdog thread logs a WARNING naming the action that blocks it, with
             its ``file:line`` and stack, and records a ``loop.blocked`` event
@@ -81,7 +84,7 @@ class Robot(StateMethods, EmergencyStop):
             ends the process in the middle of a recorder's close.
             False: leave the signals alone (see `pyrobots_aio.cli.stop_on_signals`).
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot, action
         >>> @action
@@ -104,7 +107,7 @@ class Robot(StateMethods, EmergencyStop):
         cancel_grace: float = 2.0,
         instruments: Iterable[Instrument] = (),
         backend: Backend | None = None,
-        serve: int | None = None,
+        serve: int | LiveView | None = None,
         block_threshold: float | None = DEFAULT_BLOCK_THRESHOLD,
         handle_signals: bool = True,
     ) -> None:
@@ -137,7 +140,8 @@ class Robot(StateMethods, EmergencyStop):
         self.events = EventManager(self, self._state, self._executive, self.instruments)
         self.poses = PoseManager()
         self._backend = backend
-        self.live = None if serve is None else LiveView(serve)
+        self.live = serve if isinstance(serve, LiveView) or serve is None else LiveView(serve)
+        self._owns_live = not isinstance(serve, LiveView)
         for item in actions:
             self._attach(item)
 
@@ -257,7 +261,7 @@ class Robot(StateMethods, EmergencyStop):
         stack.push_async_callback(self._close_actions)  # if a start fails (a run closed it above)
         if self.live is not None:
             self.live.start(self)
-            stack.callback(self.live.stop)
+            stack.callback(self.live.stop if self._owns_live else self.live.detach)
         for part in self._parts():
             await part.start(self)
             stack.push_async_callback(part.stop)
@@ -302,7 +306,7 @@ class Robot(StateMethods, EmergencyStop):
             PyRobotsError: The robot is running, or ``name`` is taken (an
                 attribute, an attached action or another extension).
 
-        Example:
+        Examples:
             >>> class Lamp:
             ...     async def start(self, robot: Robot) -> None:
             ...         robot.state.lamp = "on"
@@ -351,7 +355,7 @@ class Robot(StateMethods, EmergencyStop):
             EventLoopError: Called from the robot's own loop (it would deadlock:
                 await the coroutine there instead).
 
-        Example:
+        Examples:
             >>> import asyncio, threading
             >>> async def main() -> str:
             ...     async with Robot() as robot:
@@ -436,7 +440,7 @@ class Robot(StateMethods, EmergencyStop):
             TooManyAbandonedCalls: 32 abandoned calls still run (give the
                 blocking calls a timeout so that they return).
 
-        Example:
+        Examples:
             >>> import asyncio, time
             >>> async def main() -> float:
             ...     async with Robot() as robot:

@@ -35,12 +35,10 @@ A program beside a ``sim-node --rate R`` runs at its pace with
 
 from ._backend import DOCK_IN_ODOM as DOCK_IN_ODOM
 from ._backend import Ros2Backend as Ros2Backend
-from ._diagnostics import staleness as staleness
 from ._interfaces import InterfaceBuild as InterfaceBuild
 from ._interfaces import InterfaceOutcome as InterfaceOutcome
 from ._interfaces import build_interfaces as build_interfaces
 from ._interfaces import interface_packages as interface_packages
-from ._interfaces import missing_tools as missing_tools
 from ._node import Ros2Node as Ros2Node
 from ._node import attach_ros2 as attach_ros2
 from ._profiles import PROFILES as PROFILES
@@ -49,8 +47,6 @@ from ._profiles import Odometry as Odometry
 from ._profiles import Profile as Profile
 from ._profiles import Topic as Topic
 from ._profiles import profile_named as profile_named
-from ._rclpy import qos_profile as qos_profile
-from ._rclpy import ros_name as ros_name
 from ._robot import Ros2Robot as Ros2Robot
 from ._tf import TfBroadcaster as TfBroadcaster
 from ._tf import TfBuffer as TfBuffer
@@ -79,10 +75,6 @@ __all__ = [
     "attach_ros2",
     "build_interfaces",
     "interface_packages",
-    "missing_tools",
     "profile_named",
-    "qos_profile",
-    "ros_name",
-    "staleness",
     "tf_available",
 ]

@@ -34,7 +34,7 @@ def staleness(
 ) -> tuple[int, str, list[tuple[str, str]]]:
     """The level, message and per-key ages of the watched ``keys`` now.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot
         >>> robot = Robot()
         >>> staleness(robot, ["odom"], 1.0)

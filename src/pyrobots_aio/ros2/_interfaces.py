@@ -83,7 +83,7 @@ class InterfaceBuild:
 def interface_packages() -> tuple[str, ...]:
     """The interface packages pyrobots_aio carries the definitions of, sorted.
 
-    Example:
+    Examples:
         >>> interface_packages()
         ('irobot_create_msgs', 'tf2_msgs')
     """
@@ -106,7 +106,7 @@ def build_interfaces(
             (its log named).
         ValueError: ``jobs`` below 1.
 
-    Example:
+    Examples:
         >>> build_interfaces(["tf2_msgs"])  # doctest: +SKIP
         [InterfaceBuild(package='tf2_msgs', outcome=<InterfaceOutcome.BUILT: 'built'>, ...)]
     """

@@ -91,7 +91,7 @@ class Ros2Node:
         Ros2UnavailableError: rclpy cannot be imported.
         Ros2NameError: ROS 2 rejects the name or the namespace (its reason is quoted).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot
         >>> from pyrobots_aio.ros2 import attach_ros2
         >>> robot = Robot()
@@ -269,7 +269,7 @@ class Ros2Node:
             TopicTypeError: The topic is known to carry another type (both named).
             Ros2NameError: ROS 2 rejects the topic name.
 
-        Example:
+        Examples:
             >>> sub = robot.ros2.subscribe(  # doctest: +SKIP
             ...     "odom", Odometry, {"x": "pose.pose.position.x", "v": "twist.twist.linear.x"}
             ... )
@@ -304,7 +304,7 @@ class Ros2Node:
             TopicTypeError: The topic is known to carry another type (both named).
             Ros2NameError: ROS 2 rejects the topic name.
 
-        Example:
+        Examples:
             >>> cmd_vel = robot.ros2.publisher("cmd_vel", Twist)  # doctest: +SKIP
             >>> cmd_vel.publish(Twist())  # doctest: +SKIP
         """
@@ -325,7 +325,7 @@ class Ros2Node:
         Waits for the server to appear first. Cancellable: a cancelled call
         drops its request (callers own deadlines: ``asyncio.timeout``).
 
-        Example:
+        Examples:
             >>> response = await robot.ros2.call("reset", Trigger.Request())  # doctest: +SKIP
         """
         thread = self._running_thread()
@@ -353,7 +353,7 @@ class Ros2Node:
         A rejected goal fails with `GoalRejectedError`; an aborted one (or one
         cancelled by someone else) with `GoalError`.
 
-        Example:
+        Examples:
             >>> handle = robot.ros2.goal("fibonacci", Fibonacci.Goal(order=5))  # doctest: +SKIP
             >>> (await handle).sequence  # doctest: +SKIP
             array('i', [0, 1, 1, 2, 3, 5])
@@ -381,7 +381,7 @@ class Ros2Node:
         `call` and `goal` wait for their server anyway; this lets a program
         wait beforehand (under its own deadline), e.g. at start-up.
 
-        Example:
+        Examples:
             >>> async with asyncio.timeout(10):  # doctest: +SKIP
             ...     await robot.ros2.wait_for_server("fibonacci", Fibonacci)
         """
@@ -448,7 +448,7 @@ def attach_ros2(robot: Robot, name: str = "pyrobots_aio", **options: Any) -> Ros
     Raises:
         PyRobotsError: The robot is running, or has a ROS 2 node already.
 
-    Example:
+    Examples:
         >>> import asyncio
         >>> from pyrobots_aio import Robot
         >>> from std_msgs.msg import Float64  # doctest: +SKIP

@@ -66,7 +66,7 @@ def check_topic(topic: object, kind: str = "topic name") -> str:
 def ros_name(interface: type) -> str:
     """The ROS name of a generated interface class: ``geometry_msgs/msg/Twist``.
 
-    Example:
+    Examples:
         >>> class Twist: ...
         >>> Twist.__module__ = "geometry_msgs.msg._twist"
         >>> ros_name(Twist)

@@ -107,7 +107,7 @@ class Ros2Robot(DriveBase):
         Ros2UnavailableError: rclpy cannot be imported (install the ``ros2`` extra).
         Ros2NameError: ROS 2 rejects the name, the namespace or a topic (its reason quoted).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.ros2 import Ros2Robot  # doctest: +SKIP
         >>> from pyrobots_aio.sim.random_walk import random_walk
         >>> async def main() -> None:

@@ -163,7 +163,7 @@ class TfBuffer:
     async def wait_for_frames(self, *frames: str) -> None:
         """Return once tf places every one of ``frames`` (wrap it in a timeout).
 
-        Example:
+        Examples:
             >>> await robot.tf.wait_for_frames("ir_left", "bumper_left")  # doctest: +SKIP
         """
         if all(self.places(f) for f in frames):

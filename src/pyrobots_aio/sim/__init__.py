@@ -6,11 +6,11 @@ runs ``main`` on a virtual-time loop whose clock *is* simulation time: it is
 """
 
 from ..loops import run_lockstep as run
+from ..motion import WHEELS as WHEELS
 from ._backend import SimBackend as SimBackend
 from ._frames import WorldFrames as WorldFrames
 from ._models import model_path as model_path
 from ._models import models_dir as models_dir
-from ._robot import WHEELS as WHEELS
 from ._robot import SimRobot as SimRobot
 from ._world import SimWorld as SimWorld
 

@@ -14,11 +14,11 @@ from typing import cast
 from .._core._numbers import finite
 from .._exceptions import LockstepError
 from ..loops import VirtualTimeLoop, is_virtual
-from ..motion import TICKS_PER_TURN, TickingBackend
+from ..motion import TickingBackend
 from ._frames import WorldFrames
 from ._world import SimWorld
 
-__all__ = ["TICKS_PER_TURN", "SimBackend"]
+__all__ = ["SimBackend"]
 
 
 class SimBackend(TickingBackend[SimWorld]):

@@ -39,7 +39,7 @@ def models_dir() -> Path:
         ModelLoadError: Neither the installed nor the checkout location holds
             the default scene (a broken install).
 
-    Example:
+    Examples:
         >>> (models_dir() / "robot.xml").is_file()
         True
     """
@@ -63,7 +63,7 @@ def model_path(name: str = DEFAULT_SCENE) -> Path:
     Raises:
         ModelLoadError: No shipped model has that name.
 
-    Example:
+    Examples:
         >>> model_path().name
         'scene.xml'
     """

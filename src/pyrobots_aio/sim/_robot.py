@@ -1,15 +1,14 @@
 """SimRobot: the simulated differential-drive robot, a `DriveBase` over MuJoCo.
 
 Its backend is a `SimBackend` ticking a `SimWorld`; the motion actions come
-from `DriveBase`. The names below moved to `pyrobots_aio.motion` and stay
-importable from here.
+from `DriveBase`.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..motion import ANGLE_TOLERANCE, DISTANCE_TOLERANCE, DOCK_APPROACH, WHEELS, DriveBase
+from ..motion import DriveBase
 from ._backend import SimBackend
 from ._world import SimWorld
 
@@ -17,7 +16,7 @@ if TYPE_CHECKING:
     from pathlib import Path
 
 
-__all__ = ["ANGLE_TOLERANCE", "DISTANCE_TOLERANCE", "DOCK_APPROACH", "WHEELS", "SimRobot"]
+__all__ = ["SimRobot"]
 
 
 class SimRobot(DriveBase):
@@ -48,7 +47,7 @@ class SimRobot(DriveBase):
         **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions``,
             ``instruments`` ...).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import SimRobot, run
         >>> async def main() -> bool:
         ...     async with SimRobot() as robot:

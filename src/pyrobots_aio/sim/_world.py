@@ -34,7 +34,7 @@ import numpy as np
 
 from .. import ModelLoadError, SimulationUnavailableError, UnknownFrameError
 from .._core._numbers import finite
-from ..motion import limit_speeds
+from ..motion._math import limit_speeds
 from ._models import ModelLayout
 from ._models import model_path as _default_model_path
 from ._odometry import Odometry
@@ -145,7 +145,7 @@ class SimWorld:
             needs; the message names the file and the problem.
         ValueError: ``physics_dt`` is not a positive number.
 
-    Example:
+    Examples:
         >>> world = SimWorld(seed=1)
         >>> world.set_command(0.2, 0.0)
         >>> world.advance(1.0)
@@ -488,10 +488,11 @@ class SimWorld:
         material's name, else its own: ``wall``, ``obstacle``, ``dock`` in the
         shipped arena), ``x``, ``y`` and ``yaw`` of its centre, ``rgba``, and
         ``shape``: ``"box"`` with ``half`` ``[hx, hy]``, or ``"circle"`` with
-        ``radius`` (cylinders; other shapes by their bounding radius). Replay
-        draws its map from this.
+        ``radius`` (cylinders; other shapes by their bounding radius), and
+        ``z`` and ``height``, its centre's height and its own (Foxglove's 3D
+        view stands the shapes up). Replay draws its map from this.
 
-        Example:
+        Examples:
             >>> world = SimWorld()
             >>> [s["name"] for s in world.floor_plan() if s["kind"] == "dock"]
             ['dock']
@@ -507,7 +508,7 @@ class SimWorld:
             material = model.geom_matid[geom]
             kind = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_MATERIAL, material) or name
             rgba = model.mat_rgba[material] if material >= 0 else model.geom_rgba[geom]
-            x, y, _ = data.geom_xpos[geom].tolist()
+            x, y, z = data.geom_xpos[geom].tolist()
             rot = data.geom_xmat[geom]
             shape: dict[str, Any] = {"name": name, "kind": kind, "x": x, "y": y}
             shape.update(
@@ -517,10 +518,14 @@ class SimWorld:
             size = model.geom_size[geom]
             if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX:
                 shape.update(shape="box", half=[float(size[0]), float(size[1])])
+                half_height = float(size[2])
             elif model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
                 shape.update(shape="circle", radius=float(size[0]))
+                half_height = float(size[1])
             else:
-                shape.update(shape="circle", radius=float(model.geom_rbound[geom]))
+                half_height = float(model.geom_rbound[geom])
+                shape.update(shape="circle", radius=half_height)
+            shape.update(z=z, height=2 * half_height)
             shapes.append(shape)
         return shapes
 

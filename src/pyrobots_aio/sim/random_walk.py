@@ -37,6 +37,19 @@ from .._exceptions import ActionInterrupted, StallError
 from ..actions import action, lock
 from ..motion import WHEELS, DriveBase
 
+__all__ = [
+    "BACK_OFF",
+    "DETOUR",
+    "DOCK_ATTEMPTS",
+    "LEAVE_DOCK",
+    "REFLEX_PRIORITY",
+    "WalkReport",
+    "bumper_reflex",
+    "move",
+    "random_walk",
+    "suspending_reflex",
+]
+
 _log = logging.getLogger("pyrobots_aio.sim.random_walk")
 
 REFLEX_PRIORITY = 10
@@ -49,6 +62,8 @@ LEAVE_DOCK = 0.5
 """Metres driven straight out after undocking, before the random moves."""
 DETOUR = 0.4
 """Metres driven on, the way the reflex left the robot facing, before docking again."""
+REFLEX_ROUNDS = 3
+"""Back-off-and-turn rounds a reflex makes at most while the bumper stays pressed."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,6 +109,19 @@ async def suspending_reflex(robot: DriveBase) -> None:
 
 
 async def _back_off_and_turn(robot: DriveBase) -> None:
+    """Back off and turn; again while the bumper is still pressed (up to `REFLEX_ROUNDS`).
+
+    A press that comes while the reflex runs starts no second reflex (the
+    monitor drops it): if the reflex did not look again, the walk would drive
+    on into what it touched (found by exploring the walk, issue 27).
+    """
+    for _ in range(REFLEX_ROUNDS):
+        await _one_round(robot)
+        if not (robot.state.bumper_left or robot.state.bumper_right):
+            return
+
+
+async def _one_round(robot: DriveBase) -> None:
     left, right = robot.state.bumper_left, robot.state.bumper_right
     turn = -0.9 if left and not right else 0.9 if right and not left else 0.75 * math.pi
     if robot.state.docked:

@@ -22,7 +22,7 @@ def check_window(window: int) -> None:
 class MovingAverage:
     """The mean of the last ``window`` values added.
 
-    Example:
+    Examples:
         >>> average = MovingAverage(3)
         >>> [average.add(v) for v in (3.0, 6.0, 9.0, 12.0)]
         [3.0, 4.5, 6.0, 9.0]

@@ -39,7 +39,7 @@ class _Batch:
 class WriteLedger:
     """Per-key timestamps and versions of a store's writes.
 
-    Example:
+    Examples:
         >>> ledger = WriteLedger()
         >>> ledger.write("v", 1.0)
         >>> ledger.write_batch(("v", "w"), 2.0, {"v", "w"})

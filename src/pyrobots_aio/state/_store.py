@@ -85,7 +85,7 @@ class StateStore(Mapping[str, Any]):
 
     Not thread-safe: write it from the event loop's thread.
 
-    Example:
+    Examples:
         >>> store = StateStore(clock=lambda: 0.0)
         >>> seen = []
         >>> sub = store.subscribe(lambda changes: seen.append(dict(changes)), keys="bumper")
@@ -225,7 +225,7 @@ class StateStore(Mapping[str, Any]):
         inside the block records into it until the block ends. Blocks nest:
         an outer block also records what an inner one reads.
 
-        Example:
+        Examples:
             >>> store = StateStore({"bumper": False, "v": 0.0, "w": 0.0}, clock=lambda: 0.0)
             >>> with store.track_reads() as reads:
             ...     moving = store.v != 0 or store.get("w") != 0
@@ -279,7 +279,7 @@ class StateStore(Mapping[str, Any]):
         Each subscriber is called once, with the written keys it watches.
         Writing nothing does nothing.
 
-        Example:
+        Examples:
             >>> store = StateStore(clock=lambda: 0.0)
             >>> store.update({"bumper_left": False}, bumper_right=True)
             >>> dict(store), store.version()
@@ -296,7 +296,7 @@ class StateStore(Mapping[str, Any]):
         For backends writing a fresh dict of readings at every control tick;
         the caller must not change ``changes`` afterwards.
 
-        Example:
+        Examples:
             >>> store = StateStore(clock=lambda: 0.0)
             >>> store.write_owned({"v": 0.25, "w": 0.0})
             >>> store.v, store.version()
@@ -336,7 +336,7 @@ class StateStore(Mapping[str, Any]):
         Raises:
             ValueError: ``window`` is not a positive integer.
 
-        Example:
+        Examples:
             >>> store = StateStore()
             >>> [store.filtered("ir", v, window=2) for v in (1.0, 2.0, 4.0)]
             [1.0, 1.5, 3.0]

@@ -162,7 +162,7 @@ class HealthMonitor:
         robot: The robot whose state it watches and writes.
         prefix: The prefix of the state keys it writes.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot
         >>> from pyrobots_aio.sim import run
         >>> async def main() -> list[str]:

@@ -49,7 +49,7 @@ class When:
     Raises:
         InvalidConditionError: No condition, two, or a wrong one.
 
-    Example:
+    Examples:
         >>> When("bumper", becomes=True)
         When('bumper', becomes=True)
     """
@@ -138,7 +138,7 @@ class StateMachine(Action[Any, [], str]):
             out of a final state, two transitions on the same outcome, a
             state that is not an action.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Outcome, Robot, action
         >>> from pyrobots_aio.sim import run
         >>> @action

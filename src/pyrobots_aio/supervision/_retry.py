@@ -44,7 +44,7 @@ class Backoff:
     from ``random.Random(seed)``, anew for each run of the retried action: a
     seed makes them the same every run (tests), None draws fresh ones.
 
-    Example:
+    Examples:
         >>> list(exponential(0.1, factor=2, max=1.0).delays(6))
         [0.1, 0.2, 0.4, 0.8, 1.0, 1.0]
         >>> [round(d, 3) for d in exponential(1.0, jitter=0.5, seed=7).delays(3)]
@@ -104,7 +104,7 @@ def exponential(
     Raises:
         ValueError: A value out of range (the message names it).
 
-    Example:
+    Examples:
         >>> exponential(0.5, factor=3, max=4.0)
         Backoff(base=0.5, factor=3, max=4.0, jitter=0.0, seed=None)
     """
@@ -143,7 +143,7 @@ class retry(ActionDecorator):  # lower case: a decorator, as DESIGN names it
         ValueError: ``attempts`` is not a positive int, or ``on`` names no
             ``Exception`` subclass (cancellation is never retried).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot, action
         >>> from pyrobots_aio.sim import run
         >>> @retry(3, backoff=exponential(0.5), on=(ConnectionError,))

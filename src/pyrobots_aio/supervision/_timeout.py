@@ -32,7 +32,7 @@ class TimeoutReason(str):
     Attributes:
         seconds: The deadline that expired.
 
-    Example:
+    Examples:
         >>> reason = TimeoutReason(2.0)
         >>> reason, reason.seconds
         ('timeout after 2 s', 2.0)
@@ -49,7 +49,7 @@ class TimeoutReason(str):
 def timed_out(error: BaseException) -> bool:
     """Whether ``error`` is the `ActionInterrupted` of an action that its `timeout` cancelled.
 
-    Example:
+    Examples:
         >>> timed_out(ValueError("no"))
         False
     """
@@ -77,7 +77,7 @@ class timeout(ActionDecorator):  # lower case: a decorator, as DESIGN names it
     Raises:
         ValueError: ``seconds`` is not a positive number.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import ActionCancelled, ActionInterrupted, Robot, action
         >>> from pyrobots_aio.sim import run
         >>> @timeout(2)

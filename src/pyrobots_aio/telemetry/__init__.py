@@ -1,8 +1,9 @@
 """Telemetry: the Foxglove channels of a run, state sampling, and the live view.
 
-- `FoxgloveChannels` turns the executive's events, state samples, the pose and
-  log records into the messages of the Foxglove channels (`FIXED_CHANNELS`,
-  schemas in `SCHEMAS`, strict JSON);
+- `FoxgloveChannels` turns the executive's events, state samples, the pose,
+  log records and a simulated world's arena (`floor_plan`) into the messages
+  of the Foxglove channels (`FIXED_CHANNELS`, `ARENA`, schemas in `SCHEMAS`,
+  strict JSON);
 - `StateSampler` passes on what each write of a robot's state brings;
 - `LiveView` serves those channels over Foxglove's WebSocket protocol while a
   robot runs (``Robot(serve=PORT)``).
@@ -16,6 +17,9 @@ live view, so it imports telemetry; telemetry reads the robot only through
 `pyrobots_aio.Robot` meets, and never imports the robot.
 """
 
+from ._arena import ARENA as ARENA
+from ._arena import SCENE_UPDATE as SCENE_UPDATE
+from ._arena import floor_plan as floor_plan
 from ._channels import EVENT as EVENT
 from ._channels import FIXED_CHANNELS as FIXED_CHANNELS
 from ._channels import POSE_IN_FRAME as POSE_IN_FRAME
@@ -33,10 +37,12 @@ from ._sampling import StateSampler as StateSampler
 from ._source import TelemetrySource as TelemetrySource
 
 __all__ = [
+    "ARENA",
     "EVENT",
     "FIXED_CHANNELS",
     "POSE_IN_FRAME",
     "SAMPLE",
+    "SCENE_UPDATE",
     "SCHEMAS",
     "FoxgloveChannels",
     "LiveView",
@@ -46,6 +52,7 @@ __all__ = [
     "StateSampler",
     "TelemetrySource",
     "finite",
+    "floor_plan",
     "jsonable",
     "strict_json",
 ]

@@ -13,13 +13,17 @@ topic                       schema                       what
 ``/pyrobots/pose``          ``foxglove.PoseInFrame``     the robot's pose in ``map``
 ``/tf``                     ``foxglove.FrameTransforms`` ``map`` -> the robot's frame
 ``/pyrobots/log``           ``foxglove.Log``             notable events and log records
+``/pyrobots/arena``         ``foxglove.SceneUpdate``     the walls, obstacles and dock
 =========================== ============================ =====================================
 
 Every message is JSON (``json`` encoding, ``jsonschema`` schemas), strict: a
 non-finite float is written as null. Foxglove recognises its well-known
 schemas by name, whatever the encoding. Message times are the run's wall-clock
 start plus the loop time elapsed since (so Foxglove shows the date of the
-run); the executive's messages also carry the loop time itself.
+run); the events and state samples also carry a time in seconds in their
+``time`` field: the loop time in a recording (whose header's ``t0`` is the
+start), the seconds since the start in the live view (whose loop time may be
+the machine's monotonic clock, meaningless to a viewer).
 """
 
 from __future__ import annotations
@@ -39,15 +43,18 @@ from .._core._events import (
     MonitorFired,
     ResourcePreempted,
 )
+from . import _wellknown as wk
+from ._arena import ARENA, SCENE_UPDATE, SCENE_UPDATE_SCHEMA, scene_update
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Mapping
+    from collections.abc import Callable, Iterable, Mapping
 
     from .._core._events import ExecEvent
     from ._sampling import Pose2D
 
 __all__ = [
     "ACTIONS",
+    "ARENA",
     "EVENT",
     "FIXED_CHANNELS",
     "FOXGLOVE_LOG",
@@ -58,6 +65,7 @@ __all__ = [
     "POSE_IN_FRAME",
     "RESOURCES",
     "SAMPLE",
+    "SCENE_UPDATE",
     "SCHEMAS",
     "STATE_PREFIX",
     "TF",
@@ -74,42 +82,23 @@ ACTIONS, RESOURCES, MONITORS = "/pyrobots/actions", "/pyrobots/resources", "/pyr
 STATE_PREFIX = "/pyrobots/state/"
 POSE, TF, LOG = "/pyrobots/pose", "/tf", "/pyrobots/log"
 MAP = "map"
-EVENT, SAMPLE = "pyrobots_aio.ExecEvent", "pyrobots_aio.StateSample"
-POSE_IN_FRAME, FRAME_TRANSFORMS, FOXGLOVE_LOG = (
-    "foxglove.PoseInFrame",
-    "foxglove.FrameTransforms",
-    "foxglove.Log",
-)
+EVENT = "pyrobots_aio.ExecEvent"
+"""The schema of the executive's events (``/pyrobots/actions``, ``resources``, ``monitors``)."""
+SAMPLE = "pyrobots_aio.StateSample"
+"""The schema of a state key's values (``/pyrobots/state/<key>``)."""
+POSE_IN_FRAME = "foxglove.PoseInFrame"
+"""Foxglove's well-known schema of the robot's pose (``/pyrobots/pose``)."""
+FRAME_TRANSFORMS, FOXGLOVE_LOG = "foxglove.FrameTransforms", "foxglove.Log"
 
-_TIME = {
-    "type": "object",
-    "title": "time",
-    "properties": {
-        "sec": {"type": "integer", "minimum": 0},
-        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
-    },
-}
-
-
-def _numbers(title: str, names: str) -> dict[str, Any]:
-    return {
-        "title": title,
-        "type": "object",
-        "properties": {name: {"type": "number"} for name in names},
-        "required": list(names),
-    }
-
-
-_VECTOR3, _QUATERNION = _numbers("foxglove.Vector3", "xyz"), _numbers("foxglove.Quaternion", "xyzw")
 _TRANSFORM = {
     "title": "foxglove.FrameTransform",
     "type": "object",
     "properties": {
-        "timestamp": _TIME,
+        "timestamp": wk.TIME,
         "parent_frame_id": {"type": "string"},
         "child_frame_id": {"type": "string"},
-        "translation": _VECTOR3,
-        "rotation": _QUATERNION,
+        "translation": wk.VECTOR3,
+        "rotation": wk.QUATERNION,
     },
     "required": ["timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"],
 }
@@ -120,7 +109,10 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         "title": EVENT,
         "type": "object",
         "properties": {
-            "time": {"type": "number", "description": "loop time (robot.time()), seconds"},
+            "time": {
+                "type": "number",
+                "description": "seconds: loop time (a recording), since the start (live)",
+            },
             "kind": {"type": "string", "description": "what happened, e.g. action.finished"},
             "action": {"type": ["integer", "null"], "description": "the action's id"},
             "name": {"type": ["string", "null"], "description": "the action's or monitor's name"},
@@ -132,7 +124,10 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         "title": SAMPLE,
         "type": "object",
         "properties": {
-            "time": {"type": "number", "description": "loop time of the write, seconds"},
+            "time": {
+                "type": "number",
+                "description": "seconds: loop time (a recording), since the start (live)",
+            },
             "key": {"type": "string"},
             "value": {"description": "the value written"},
         },
@@ -142,14 +137,9 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         "title": POSE_IN_FRAME,
         "type": "object",
         "properties": {
-            "timestamp": _TIME,
+            "timestamp": wk.TIME,
             "frame_id": {"type": "string"},
-            "pose": {
-                "title": "foxglove.Pose",
-                "type": "object",
-                "properties": {"position": _VECTOR3, "orientation": _QUATERNION},
-                "required": ["position", "orientation"],
-            },
+            "pose": wk.POSE,
         },
         "required": ["timestamp", "frame_id", "pose"],
     },
@@ -163,7 +153,7 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         "title": FOXGLOVE_LOG,
         "type": "object",
         "properties": {
-            "timestamp": _TIME,
+            "timestamp": wk.TIME,
             "level": {
                 "title": "foxglove.LogLevel",
                 "oneOf": [{"title": n, "const": i} for i, n in enumerate(_LEVELS)],
@@ -175,6 +165,7 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         },
         "required": ["timestamp", "level", "message", "name", "file", "line"],
     },
+    SCENE_UPDATE: SCENE_UPDATE_SCHEMA,
 }
 """Each schema's JSON schema, by schema name (Foxglove's own names for its well-known ones)."""
 
@@ -235,14 +226,6 @@ def strict_json(value: object) -> bytes:
     return text.encode()
 
 
-def _stamp(ns: int) -> dict[str, int]:
-    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
-
-
-def _quaternion(yaw: float) -> dict[str, float]:
-    return {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)}
-
-
 class FoxgloveChannels:
     """Turns a run's events, samples and log lines into `Message` values.
 
@@ -250,24 +233,33 @@ class FoxgloveChannels:
         origin_ns: The wall-clock time of the run's start, in ns since 1970.
         t0: The loop time at that start.
         frame: The robot frame whose pose is published (``base_link``).
+        since_start: The ``time`` of events and samples counts seconds from
+            ``t0`` (the live view); else it is the loop time (a recording).
     """
 
-    def __init__(self, origin_ns: int, t0: float, frame: str = "base_link") -> None:
+    def __init__(
+        self, origin_ns: int, t0: float, frame: str = "base_link", *, since_start: bool = False
+    ) -> None:
         self.origin_ns = origin_ns
         self.t0 = t0
         self.frame = frame
+        self.since_start = since_start
         self._names: dict[int, str] = {}
 
     def stamp(self, time: float) -> int:
         """The message time of loop time ``time`` (never before the start)."""
         return self.origin_ns + max(0, round((time - self.t0) * 1e9))
 
+    def _seconds(self, time: float) -> float:
+        """The ``time`` field of loop time ``time``."""
+        return time - self.t0 if self.since_start else time
+
     def event(self, event: ExecEvent) -> list[Message]:
         """The executive event on its channel, and a log line if it is a notable one."""
         kind = event.kind.value
         topic = _GROUP_TOPICS.get(kind.partition(".")[0], MONITORS)
-        body = {"time": event.time, "kind": kind, "action": event.action, "name": event.name}
-        body["data"] = event.data
+        body = {"time": self._seconds(event.time), "kind": kind, "action": event.action}
+        body.update(name=event.name, data=event.data)
         stamp = self.stamp(event.time)
         messages = [Message(topic, EVENT, strict_json(body), stamp)]
         line = self._notable(event)
@@ -307,24 +299,23 @@ class FoxgloveChannels:
         self, time: float, values: Mapping[str, object], pose: Pose2D | None
     ) -> list[Message]:
         """A state write: one message per key, and the pose and transform."""
-        stamp = self.stamp(time)
+        stamp, seconds = self.stamp(time), self._seconds(time)
         messages = [
             Message(
                 STATE_PREFIX + key,
                 SAMPLE,
-                strict_json({"time": time, "key": key, "value": value}),
+                strict_json({"time": seconds, "key": key, "value": value}),
                 stamp,
             )
             for key, value in values.items()
         ]
         if pose is not None:
             x, y, yaw = pose
-            position = {"x": x, "y": y, "z": 0.0}
-            in_frame = {"timestamp": _stamp(stamp), "frame_id": MAP}
-            in_frame["pose"] = {"position": position, "orientation": _quaternion(yaw)}
-            transform = {"timestamp": _stamp(stamp), "parent_frame_id": MAP}
-            transform.update(child_frame_id=self.frame, translation=position)
-            transform["rotation"] = _quaternion(yaw)
+            planar = wk.planar_pose(x, y, 0.0, yaw)
+            in_frame = {"timestamp": wk.stamp(stamp), "frame_id": MAP, "pose": planar}
+            transform = {"timestamp": wk.stamp(stamp), "parent_frame_id": MAP}
+            transform.update(child_frame_id=self.frame, translation=planar["position"])
+            transform["rotation"] = planar["orientation"]
             messages.append(Message(POSE, POSE_IN_FRAME, strict_json(in_frame), stamp))
             messages.append(
                 Message(TF, FRAME_TRANSFORMS, strict_json({"transforms": [transform]}), stamp)
@@ -336,9 +327,14 @@ class FoxgloveChannels:
     ) -> Message:
         """A ``foxglove.Log`` line."""
         stamp = self.stamp(time)
-        body = {"timestamp": _stamp(stamp), "level": level, "message": text, "name": name}
+        body = {"timestamp": wk.stamp(stamp), "level": level, "message": text, "name": name}
         body.update(file=file, line=max(0, line))
         return Message(LOG, FOXGLOVE_LOG, strict_json(body), stamp)
+
+    def arena(self, shapes: Iterable[Mapping[str, Any]], log_time: int | None = None) -> Message:
+        """The ``foxglove.SceneUpdate`` drawing a floor plan, at ``log_time`` (None: the start)."""
+        stamp = self.origin_ns if log_time is None else log_time
+        return Message(ARENA, SCENE_UPDATE, strict_json(scene_update(shapes, stamp)), stamp)
 
 
 def log_level(levelno: int) -> int:

@@ -20,7 +20,7 @@ class TelemetrySource(Protocol):
 
     `pyrobots_aio.Robot` is one.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio import Robot
         >>> from pyrobots_aio.sim import run
         >>> from pyrobots_aio.telemetry import StateSampler

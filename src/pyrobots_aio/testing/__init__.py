@@ -6,6 +6,9 @@ the ``virtual_time`` marker; `EventLog` asserts on what the executive did;
 `FakeBase` is a `pyrobots_aio.DriveBase` in memory (no simulator) for
 testing motion behaviours in virtual time; `inject_bump` and `inject_state`
 press the bumper (or write any state) at a chosen action boundary.
+`pyrobots_aio.testing.explore` (the ``explore`` extra: Hypothesis) searches
+for the schedule of disturbances that breaks a behaviour, and the plugin's
+``explore`` fixture runs it.
 """
 
 from ._events import EventLog as EventLog

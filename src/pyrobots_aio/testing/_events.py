@@ -20,7 +20,7 @@ class EventLog:
     Look events up by class (typed: ``log.first(ActionFinished).outcome``) or by
     `EventKind`.
 
-    Example:
+    Examples:
         >>> log = EventLog()
         >>> log.on_event(ActionSpawned(0.0, 1, "walk", parent=None))
         >>> log.names_started(), log.first(ActionSpawned).parent

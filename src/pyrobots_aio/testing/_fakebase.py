@@ -24,7 +24,8 @@ import numpy as np
 
 from .. import UnknownFrameError
 from .._core._numbers import as_float, finite, shown
-from ..motion import SENSORS, DriveBase, SensorKind, TickingBackend, limit_speeds
+from ..motion import SENSORS, DriveBase, SensorKind, TickingBackend
+from ..motion._math import limit_speeds
 
 if TYPE_CHECKING:
     from collections.abc import Collection, Iterable
@@ -66,24 +67,34 @@ class Box:
 
     def nearest(self, px: float, py: float) -> tuple[float, float]:
         """The point of the box nearest to ``(px, py)``, in the map."""
-        lx, ly = self.local(px, py)
-        cx, cy = min(max(lx, -self.hx), self.hx), min(max(ly, -self.hy), self.hy)
-        c, s = self._c, self._s
+        c, s, hx, hy = self._c, self._s, self.hx, self.hy
+        dx, dy = px - self.x, py - self.y  # in the box's frame (`local`), inlined: every tick
+        lx, ly = c * dx + s * dy, -s * dx + c * dy
+        cx = -hx if lx < -hx else hx if lx > hx else lx
+        cy = -hy if ly < -hy else hy if ly > hy else ly
         return self.x + c * cx - s * cy, self.y + s * cx + c * cy
 
     def ray(self, px: float, py: float, angle: float) -> float:
         """How far a ray from ``(px, py)`` at ``angle`` goes to meet the box (inf: never)."""
         lx, ly = self.local(px, py)
-        dx, dy = math.cos(angle - self.yaw), math.sin(angle - self.yaw)
-        near, far = 0.0, math.inf
-        for origin, direction, half in ((lx, dx, self.hx), (ly, dy, self.hy)):
-            if abs(direction) < 1e-12:
-                if abs(origin) > half:
-                    return math.inf
-                continue
-            t1, t2 = sorted(((-half - origin) / direction, (half - origin) / direction))
-            near, far = max(near, t1), min(far, t2)
+        near, far = _slab(0.0, math.inf, lx, math.cos(angle - self.yaw), self.hx)
+        near, far = _slab(near, far, ly, math.sin(angle - self.yaw), self.hy)
         return near if near <= far else math.inf
+
+
+def _slab(
+    near: float, far: float, origin: float, direction: float, half: float
+) -> tuple[float, float]:
+    """``(near, far)`` narrowed to where a ray from ``origin`` along ``direction`` is in the slab.
+
+    A ray parallel to the slab and outside it gives an empty interval (``near > far``).
+    """
+    if abs(direction) < 1e-12:
+        return (near, far) if abs(origin) <= half else (math.inf, 0.0)
+    t1, t2 = (-half - origin) / direction, (half - origin) / direction
+    if t1 > t2:
+        t1, t2 = t2, t1
+    return (t1 if t1 > near else near), (t2 if t2 < far else far)
 
 
 def _room(xmin: float, ymin: float, xmax: float, ymax: float) -> list[Box]:
@@ -142,7 +153,7 @@ class FakeWorld:
             cable caught in them): the robot and its odometry stay put. A
             test sets it to see a motion stall anywhere, turning included.
 
-    Example:
+    Examples:
         >>> world = FakeWorld()
         >>> world.set_command(0.2, 0.0)
         >>> world.step(1.0)
@@ -381,7 +392,7 @@ class FakeBase(DriveBase):
         sensors: Its sensors (default: the standard robot's, `pyrobots_aio.motion.SENSORS`).
         **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions`` ...).
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import run
         >>> from pyrobots_aio.sim.random_walk import random_walk
         >>> async def main() -> tuple[int, bool]:

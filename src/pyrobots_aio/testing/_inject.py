@@ -166,7 +166,7 @@ def inject_bump(
     ``hold``, the injection writes the release itself that many seconds
     later. See `inject_state` for when the press comes.
 
-    Example:
+    Examples:
         >>> from pyrobots_aio.sim import run
         >>> from pyrobots_aio.sim.random_walk import random_walk
         >>> from pyrobots_aio.testing import FakeBase

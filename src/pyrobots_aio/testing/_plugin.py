@@ -5,6 +5,8 @@ Markers:
         ``asyncio.sleep(3600)`` returns at once with ``loop.time()`` 3600 s later
         (the test is run by pytest-asyncio: ``@pytest.mark.asyncio``).
     allow_leaks: the leak checks below are skipped for this test.
+    explore(examples=N, workers=W): the ``explore`` fixture tries N schedules
+        (default 100) in W processes (default 1).
 
 Fixtures:
     robot: a running dummy ``Robot(dummy=True)`` with an `EventLog` attached.
@@ -17,6 +19,10 @@ Fixtures:
         `EventLog`, for all the tests of a module, on the module's loop.
     session_robot, session_sim_robot, session_robot_events: the same for the
         whole session, on the session's loop.
+    explore: ``explore(scenario)`` searches a `pyrobots_aio.testing.explore.Scenario`
+        with the marker's examples, the ``--explore-profile`` (``ci``, the
+        default: derandomized; ``dev``; ``long``), recording a failure into
+        the test's ``tmp_path`` (needs the ``explore`` extra).
 
 Loop scopes: ``robot``, ``sim_robot`` and ``no_leaked_tasks`` are
 function-scoped and run on the loop of the test that uses them, whatever its
@@ -52,11 +58,29 @@ import importlib.metadata
 
 import pytest
 
+from . import _explore_fixture
+from ._profiles import ENVIRONMENT, PROFILES
+
 REQUIRED = (1, 4)
 INSTALL = 'pip install "pytest-asyncio>=1.4" (or pip install -e ".[testing]" in a checkout)'
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--explore-profile",
+        choices=PROFILES,
+        default=None,
+        help=f"the explore fixture's Hypothesis profile (default: ${ENVIRONMENT}, else ci)",
+    )
+
+
 def pytest_configure(config: pytest.Config) -> None:
+    config.pluginmanager.register(_explore_fixture, "pyrobots_aio.explore")
+    config.addinivalue_line(
+        "markers",
+        "explore(examples=N, workers=W): the explore fixture tries N schedules (default 100) "
+        "in W processes (default 1).",
+    )
     config.addinivalue_line(
         "markers", "allow_leaks: this test may leave asyncio tasks behind (not checked)."
     )
