@@ -20,11 +20,13 @@ from test_sim_node import sim_node, stop  # noqa: E402
 README = (Path(__file__).parent.parent.parent / "README.md").read_text()
 SNIPPETS = re.findall(r"```python ros2\n(.*?)```", README, flags=re.DOTALL)
 ROBOT_SNIPPETS = re.findall(r"```python ros2-robot\n(.*?)```", README, flags=re.DOTALL)
+SERVE_SNIPPETS = re.findall(r"```python ros2-serve\n(.*?)```", README, flags=re.DOTALL)
 
 
 def test_the_readme_has_a_ros2_snippet() -> None:
     assert len(SNIPPETS) == 1
     assert len(ROBOT_SNIPPETS) == 1
+    assert len(SERVE_SNIPPETS) == 1
     assert "pyrobots-aio sim-node --namespace /robot1 --rate 4" in README
     assert "pyrobots-aio sim-node --namespace /robot1" in README
 
@@ -67,4 +69,24 @@ async def test_the_ros2_robot_snippet_walks_a_sim_node(tmp_path: Path) -> None:
         out, err = await user.communicate()
         assert user.returncode == 0, err.decode()
         assert out.decode() == "3 moves, docked: True\n"
+        assert (await stop(node, signal.SIGINT))[0] == 0
+
+
+@pytest.mark.asyncio
+async def test_the_served_action_snippet_turns_a_sim_node(tmp_path: Path) -> None:
+    import signal
+
+    pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+    script = tmp_path / "serve.py"
+    script.write_text(SERVE_SNIPPETS[0])
+    async with asyncio.timeout(DEADLINE), sim_node("--namespace", "/robot1") as node:
+        user = await asyncio.create_subprocess_exec(
+            sys.executable,
+            str(script),
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        out, err = await user.communicate()
+        assert user.returncode == 0, err.decode()
+        assert re.fullmatch(r"turned to 1\.0\d rad\n", out.decode())
         assert (await stop(node, signal.SIGINT))[0] == 0

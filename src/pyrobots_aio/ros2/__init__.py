@@ -14,6 +14,11 @@ running inside ``async with robot``:
 - ``robot.ros2.goal(action, goal)`` runs a ROS 2 action goal as a
   pyrobots_aio action: cancelling it cancels the goal, feedback goes to the
   state, the goal's result is the action's result;
+- ``robot.ros2.serve_action(name, action_type, fn)`` and
+  ``serve_service(name, srv_type, fn)`` serve the executive to ROS 2: each
+  goal or request runs ``fn`` as a pyrobots_aio action (resources,
+  priorities, pause and the emergency stop apply; a ROS 2 cancel arrives as
+  ``ActionCancelled``);
 - ``/diagnostics`` reports whether the watched state is fresh.
 
 `Ros2Robot` is a `pyrobots_aio.motion.DriveBase` whose backend
@@ -50,6 +55,8 @@ from ._profiles import profile_named as profile_named
 from ._rclpy import qos_profile as qos_profile
 from ._rclpy import ros_name as ros_name
 from ._robot import Ros2Robot as Ros2Robot
+from ._serve import Ros2ActionServer as Ros2ActionServer
+from ._serve import Ros2ServiceServer as Ros2ServiceServer
 from ._topics import Ros2Publisher as Ros2Publisher
 from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
@@ -62,10 +69,12 @@ __all__ = [
     "InterfaceOutcome",
     "Odometry",
     "Profile",
+    "Ros2ActionServer",
     "Ros2Backend",
     "Ros2Node",
     "Ros2Publisher",
     "Ros2Robot",
+    "Ros2ServiceServer",
     "Ros2Subscription",
     "ToState",
     "Topic",
