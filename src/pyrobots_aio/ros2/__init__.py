@@ -26,6 +26,9 @@ running inside ``async with robot``:
 conversions, used by ``pyrobots-aio sim-node`` as well. `STANDARD` is the
 standard messages' (``cmd_vel``, ``odom``, IR ``Range``, bumper/cliff/dock
 ``Bool``); the motion actions and the random walk run on it as on the simulator.
+`CREATE3` is the iRobot Create 3's (``hazard_detection``, ``ir_intensity``,
+``dock_status``; its action servers in `CREATE3_ACTIONS`, which
+`serve_create3` serves over any `pyrobots_aio.motion.DriveBase`).
 
 `build_interfaces` builds the interface packages PyPI lacks (``tf2_msgs``,
 ``irobot_create_msgs``) from the definitions pyrobots_aio carries, into this
@@ -38,6 +41,10 @@ A program beside a ``sim-node --rate R`` runs at its pace with
 
 from ._backend import DOCK_IN_ODOM as DOCK_IN_ODOM
 from ._backend import Ros2Backend as Ros2Backend
+from ._create3 import CREATE3 as CREATE3
+from ._create3 import CREATE3_ACTIONS as CREATE3_ACTIONS
+from ._create3 import IR_MAX_INTENSITY as IR_MAX_INTENSITY
+from ._create3_serve import serve_create3 as serve_create3
 from ._diagnostics import staleness as staleness
 from ._interfaces import InterfaceBuild as InterfaceBuild
 from ._interfaces import InterfaceOutcome as InterfaceOutcome
@@ -62,7 +69,10 @@ from ._topics import Ros2Subscription as Ros2Subscription
 from ._topics import ToState as ToState
 
 __all__ = [
+    "CREATE3",
+    "CREATE3_ACTIONS",
     "DOCK_IN_ODOM",
+    "IR_MAX_INTENSITY",
     "PROFILES",
     "STANDARD",
     "InterfaceBuild",
@@ -85,5 +95,6 @@ __all__ = [
     "profile_named",
     "qos_profile",
     "ros_name",
+    "serve_create3",
     "staleness",
 ]
