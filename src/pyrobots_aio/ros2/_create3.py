@@ -52,6 +52,13 @@ CREATE3_ACTIONS = {
 }
 """The Create 3's action servers (relative names: under the robot's namespace), by name."""
 
+
+def create3_action(name: str) -> Any:
+    """The action type of the Create 3's action server ``name`` (a key of `CREATE3_ACTIONS`)."""
+    package, kind, cls = CREATE3_ACTIONS[name].split("/")
+    return getattr(rclpy_module(f"{package}.{kind}"), cls)
+
+
 _BUMP_SIDES = {  # a BUMP's frame: the bumper keys it presses
     "bump_left": ("bumper_left",),
     "bump_front_left": ("bumper_left",),

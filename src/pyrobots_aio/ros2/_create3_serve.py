@@ -1,7 +1,7 @@
 """The Create 3's action servers, served over any `DriveBase`'s own motion actions.
 
 ``undock``, ``dock``, ``drive_distance``, ``rotate_angle`` and
-``navigate_to_position`` (`CREATE3_ACTIONS`), each a served action
+``navigate_to_position`` (``CREATE3_ACTIONS``), each a served action
 (`Ros2Node.serve_action`) whose goal runs the base's motion action of the
 same meaning: goal, feedback (at each control tick), result (the pose in
 ``odom``), cancel (the motion action is cancelled, so the base stops, and the
@@ -20,7 +20,7 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from ._create3 import CREATE3_ACTIONS
+from ._create3 import create3_action
 from ._profiles import _yaw
 from ._rclpy import rclpy_module
 
@@ -35,11 +35,6 @@ if TYPE_CHECKING:
 __all__ = ["serve_create3"]
 
 Feedback = Callable[..., None]
-
-
-def _action(name: str) -> Any:
-    package, kind, cls = CREATE3_ACTIONS[name].split("/")
-    return getattr(rclpy_module(f"{package}.{kind}"), cls)
 
 
 def _pose(robot: DriveBase) -> Any:
@@ -69,13 +64,13 @@ async def _with_feedback(
 
 async def _undock(robot: DriveBase, _goal: Any, _feedback: Feedback) -> Any:
     await robot.undock()
-    return _action("undock").Result(is_docked=bool(robot.state["docked"]))
+    return create3_action("undock").Result(is_docked=bool(robot.state["docked"]))
 
 
 async def _dock(robot: DriveBase, _goal: Any, feedback: Feedback) -> Any:
     feedback(sees_dock=True)  # the dock's place is known: it is always in sight
     await robot.dock()
-    return _action("dock").Result(is_docked=bool(robot.state["docked"]))
+    return create3_action("dock").Result(is_docked=bool(robot.state["docked"]))
 
 
 async def _drive_distance(robot: DriveBase, goal: Any, feedback: Feedback) -> Any:
@@ -87,7 +82,7 @@ async def _drive_distance(robot: DriveBase, goal: Any, feedback: Feedback) -> An
 
     motion = robot.drive_distance(goal.distance, goal.max_translation_speed)
     await _with_feedback(robot, motion, feedback, remaining)
-    return _action("drive_distance").Result(pose=_pose(robot))
+    return create3_action("drive_distance").Result(pose=_pose(robot))
 
 
 async def _rotate_angle(robot: DriveBase, goal: Any, feedback: Feedback) -> Any:
@@ -102,11 +97,11 @@ async def _rotate_angle(robot: DriveBase, goal: Any, feedback: Feedback) -> Any:
         return {"remaining_angle_travel": goal.angle - turned[0]}
 
     await _with_feedback(robot, motion, feedback, remaining)
-    return _action("rotate_angle").Result(pose=_pose(robot))
+    return create3_action("rotate_angle").Result(pose=_pose(robot))
 
 
 async def _navigate(robot: DriveBase, goal: Any, feedback: Feedback) -> Any:
-    kinds = _action("navigate_to_position").Feedback
+    kinds = create3_action("navigate_to_position").Feedback
     target = goal.goal_pose.pose
     frame = goal.goal_pose.header.frame_id or "odom"
     tx, ty = target.position.x, target.position.y
@@ -135,7 +130,7 @@ async def _navigate(robot: DriveBase, goal: Any, feedback: Feedback) -> Any:
 
     motion = robot.navigate_to(pose, goal.max_translation_speed)
     await _with_feedback(robot, motion, feedback, remaining)
-    return _action("navigate_to_position").Result(pose=_pose(robot))
+    return create3_action("navigate_to_position").Result(pose=_pose(robot))
 
 
 _SERVED: dict[str, Callable[[DriveBase, Any, Feedback], Coroutine[Any, Any, Any]]] = {
@@ -155,4 +150,4 @@ def serve_create3(robot: DriveBase, ros2: Ros2Node) -> list[Ros2ActionServer]:
         >>> [s.name for s in servers]  # doctest: +SKIP
         ['/undock', '/dock', '/drive_distance', '/rotate_angle', '/navigate_to_position']
     """
-    return [ros2.serve_action(name, _action(name), fn) for name, fn in _SERVED.items()]
+    return [ros2.serve_action(name, create3_action(name), fn) for name, fn in _SERVED.items()]
