@@ -21,12 +21,15 @@ README = (Path(__file__).parent.parent.parent / "README.md").read_text()
 SNIPPETS = re.findall(r"```python ros2\n(.*?)```", README, flags=re.DOTALL)
 ROBOT_SNIPPETS = re.findall(r"```python ros2-robot\n(.*?)```", README, flags=re.DOTALL)
 SERVE_SNIPPETS = re.findall(r"```python ros2-serve\n(.*?)```", README, flags=re.DOTALL)
+CREATE3_SNIPPETS = re.findall(r"```python ros2-create3\n(.*?)```", README, flags=re.DOTALL)
 
 
 def test_the_readme_has_a_ros2_snippet() -> None:
     assert len(SNIPPETS) == 1
     assert len(ROBOT_SNIPPETS) == 1
     assert len(SERVE_SNIPPETS) == 1
+    assert len(CREATE3_SNIPPETS) == 1
+    assert "pyrobots-aio sim-node --namespace /robot1 --profile create3 --rate 4" in README
     assert "pyrobots-aio sim-node --namespace /robot1 --rate 4" in README
     assert "pyrobots-aio sim-node --namespace /robot1" in README
 
@@ -51,14 +54,17 @@ async def test_the_ros2_snippet_drives_a_sim_node(tmp_path: Path) -> None:
 
 
 @pytest.mark.asyncio
-async def test_the_ros2_robot_snippet_walks_a_sim_node(tmp_path: Path) -> None:
+@pytest.mark.parametrize("profile", ["standard", "create3"])
+async def test_the_ros2_robot_snippets_walk_a_sim_node(tmp_path: Path, profile: str) -> None:
     import signal
 
+    if profile == "create3":
+        pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
     script = tmp_path / "walk.py"
-    script.write_text(ROBOT_SNIPPETS[0])
+    script.write_text((ROBOT_SNIPPETS if profile == "standard" else CREATE3_SNIPPETS)[0])
     async with (
         asyncio.timeout(DEADLINE * 2),
-        sim_node("--namespace", "/robot1", "--rate", "4") as node,
+        sim_node("--namespace", "/robot1", "--rate", "4", "--profile", profile) as node,
     ):
         user = await asyncio.create_subprocess_exec(
             sys.executable,
