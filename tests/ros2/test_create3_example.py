@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import re
-import sys
 from pathlib import Path
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy
+from ros2_support import DEADLINE, require_rclpy, run_script
 
 require_rclpy()
 pytest.importorskip(
@@ -27,24 +26,10 @@ async def test_the_create3_program_undocks_walks_is_cancelled_by_a_bump_and_dock
         asyncio.timeout(DEADLINE * 2),
         sim_node("--namespace", "/walker", "--profile", "create3", "--rate", "4"),
     ):
-        program = await asyncio.create_subprocess_exec(
-            sys.executable,
-            str(EXAMPLE),
-            "--external",
-            "--namespace",
-            "/walker",
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE,
-        )
-        try:
-            out, err = await program.communicate()
-        finally:
-            if program.returncode is None:
-                program.kill()
-                await program.wait()
-    told = f"stdout:\n{out.decode()}\nstderr (end):\n{err.decode()[-3000:]}"
-    assert program.returncode == 0, told
-    summary = re.fullmatch(r"6 moves, (\d+) drives cancelled by bumps, docked\n", out.decode())
+        code, out, err = await run_script(EXAMPLE, "--external", "--namespace", "/walker")
+    told = f"stdout:\n{out}\nstderr (end):\n{err[-3000:]}"
+    assert code == 0, told
+    summary = re.fullmatch(r"6 moves, (\d+) drives cancelled by bumps, docked\n", out)
     assert summary is not None, told
     assert int(summary[1]) >= 1, told  # seed 0 drives into a wall
-    assert "bump: cancelling the drive" in err.decode()
+    assert "bump: cancelling the drive" in err
