@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import threading
 from typing import TYPE_CHECKING, Any
 
 import pytest
@@ -249,3 +250,48 @@ async def test_a_served_request_runs_as_an_action_and_its_return_is_the_response
         await client.meet(robot, action=False)
         response = await client.future(client.service.call_async(SetBool.Request(data=True)))
         assert (response.success, response.message) == (True, "closed")
+
+
+class Refusals(logging.Handler):
+    """Sets ``refused`` (a thread's event) when a server logs that it refused a request."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.refused = threading.Event()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if "refused a request" in record.getMessage():
+            self.refused.set()
+
+
+@pytest.mark.asyncio
+async def test_a_goal_the_loop_does_not_decide_in_time_is_rejected_and_never_runs(
+    client: Client, caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from pyrobots_aio.ros2 import _serve
+
+    monkeypatch.setattr(_serve, "DECISION_BOUND", 0.2)
+    started: list[int] = []
+
+    async def never(robot: Robot, goal: Any, feedback: Any) -> None:
+        started.append(goal.order)
+
+    refusals = Refusals()
+    logging.getLogger("pyrobots_aio.ros2").addHandler(refusals)
+    try:
+        async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
+            robot.ros2.serve_action("/count", Fibonacci, never)
+            await client.meet(robot)
+            with caplog.at_level(logging.WARNING, "pyrobots_aio.ros2"):
+                sent = client.future(client.actions.send_goal_async(Fibonacci.Goal(order=1)))
+                # The loop is stuck (on purpose) until the server gave up waiting for it.
+                assert refusals.refused.wait(DEADLINE)
+                goal = await sent
+                assert not goal.accepted
+                assert warnings_of(caplog) == [
+                    "action server /count refused a request: the robot's event loop did not "
+                    "answer within 0.2 s"
+                ]
+            assert started == []  # the start came to the loop after the refusal: nothing ran
+    finally:
+        logging.getLogger("pyrobots_aio.ros2").removeHandler(refusals)

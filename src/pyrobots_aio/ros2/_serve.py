@@ -80,6 +80,15 @@ def _start(robot: Robot, act: Action[Any, Any, Any], *args: Any) -> ActionHandle
         return str(error)
 
 
+def _answer(decision: concurrent.futures.Future[Any], answer: object) -> bool:
+    """Answer the ROS thread; False if it stopped waiting (its request is refused)."""
+    try:
+        decision.set_result(answer)
+    except concurrent.futures.InvalidStateError:
+        return False
+    return True
+
+
 def _why_not(handle: ActionHandle[Any]) -> str | None:
     """After the action's first step: None if it runs (or succeeded), else why it could not."""
     if handle.done() and handle.outcome is not Outcome.SUCCEEDED:
@@ -111,9 +120,11 @@ class _Server:
 
     def _begin(self, decision: concurrent.futures.Future[Any], *args: Any) -> None:
         """On the loop: start the action; answer ``decision`` after its first step."""
+        if decision.cancelled():  # the ROS thread stopped waiting: refused already
+            return
         started = _start(self.robot, self.action, *args)
         if isinstance(started, str):
-            decision.set_result(started)
+            _answer(decision, started)
             return
         self.handles.add(started)
         started.add_done_callback(self.handles.discard)
@@ -122,7 +133,8 @@ class _Server:
     @staticmethod
     def _decide(handle: ActionHandle[Any], decision: concurrent.futures.Future[Any]) -> None:
         reason = _why_not(handle)
-        decision.set_result(handle if reason is None else reason)
+        if not _answer(decision, handle if reason is None else reason):
+            handle.cancel("its ROS 2 request was refused: the answer came too late")
 
     def _ask_loop(self, *args: Any) -> ActionHandle[Any] | str:
         """On the ROS thread: start the action on the loop; its handle, or why it cannot run."""
@@ -131,7 +143,13 @@ class _Server:
         try:
             answer: ActionHandle[Any] | str = decision.result(timeout=DECISION_BOUND)
         except concurrent.futures.TimeoutError:
-            answer = f"the robot's event loop did not answer within {DECISION_BOUND:g} s"
+            # Refused, unless the answer came in between: the loop then sees it cancelled.
+            late = not decision.cancel()
+            answer = (
+                decision.result()
+                if late
+                else f"the robot's event loop did not answer within {DECISION_BOUND:g} s"
+            )
         if isinstance(answer, str):
             _log.warning("%s %s refused a request: %s", self.kind, self.name, answer)
         return answer
