@@ -161,6 +161,9 @@ if __name__ == "__main__":
     parser.add_argument("--seed", type=int, default=0, help="seeds the moves (default: 0)")
     parser.add_argument("--external", action="store_true", help="drive a robot of your own")
     options = parser.parse_args()
+    from pyrobots_aio.cli import install_console_handler  # the starter's part, not the robot's
+
+    install_console_handler()
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     if not options.external:  # the sim-node inherits it
         os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 101)))
