@@ -79,10 +79,12 @@ EXPORTS: dict[str, list[str]] = {
     ],
     "pyrobots_aio.robot": ["Backend", "GenericRobot", "Robot", "SignalStop", "stop_on_signals"],
     "pyrobots_aio.ros2": [
-        "DOCK_IN_ODOM", "PROFILES", "STANDARD", "InterfaceBuild", "InterfaceOutcome", "Odometry",
-        "Profile", "Ros2Backend", "Ros2Node", "Ros2Publisher", "Ros2Robot", "Ros2Subscription",
-        "TfBroadcaster", "TfBuffer", "ToState", "Topic", "attach_ros2", "build_interfaces",
-        "interface_packages", "profile_named", "tf_available",
+        "CREATE3", "CREATE3_ACTIONS", "DOCK_IN_ODOM", "IR_MAX_INTENSITY", "PROFILES",
+        "STANDARD", "InterfaceBuild", "InterfaceOutcome", "Odometry", "Profile",
+        "Ros2ActionServer", "Ros2Backend", "Ros2Node", "Ros2Publisher", "Ros2Robot",
+        "Ros2ServiceServer", "Ros2Subscription", "TfBroadcaster", "TfBuffer", "ToState",
+        "Topic", "attach_ros2", "build_interfaces", "interface_packages", "profile_named",
+        "serve_create3", "tf_available",
     ],
     "pyrobots_aio.sim": [
         "WHEELS", "SimBackend", "SimRobot", "SimWorld", "WorldFrames", "model_path",

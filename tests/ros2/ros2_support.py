@@ -154,6 +154,24 @@ async def meet(robot: Any, server: PlainNode, name: str, interface: type) -> Non
     await wait_for(lambda: server.knows_client(node, namespace, name, action=action))
 
 
+async def run_script(script: Path, *args: str) -> tuple[int, str, str]:
+    """Run ``python script args`` to its end (killed if cancelled): exit code, stdout, stderr."""
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        str(script),
+        *args,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    try:
+        out, err = await process.communicate()
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    return process.returncode or 0, out.decode(), err.decode()
+
+
 SIM_NODE = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]
 
 

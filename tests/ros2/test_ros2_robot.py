@@ -184,7 +184,7 @@ async def test_a_robot_whose_topics_stay_silent_says_which_and_leaves_nothing_be
         (
             {"profile": "create2"},
             ValueError,
-            "unknown ROS 2 profile 'create2'; known profiles: ['standard']",
+            "unknown ROS 2 profile 'create2'; known profiles: ['create3', 'standard']",
         ),
     ],
     ids=[

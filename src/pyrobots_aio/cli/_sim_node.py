@@ -50,6 +50,13 @@ topic                         type                          QoS
   at its start and once, with the count, at its end.
 - Stamps: the system clock in real time; the simulation's clock (which
   ``/clock`` carries, from 0) when ``--rate`` is not 1.
+
+``--profile create3`` speaks the iRobot Create 3's interface instead
+(`pyrobots_aio.ros2.CREATE3`: ``hazard_detection``, ``ir_intensity``,
+``dock_status``, ``odom``, ``cmd_vel``, ``battery_state``) and serves its
+action servers ``undock``, ``dock``, ``drive_distance``, ``rotate_angle`` and
+``navigate_to_position`` over the simulated robot's own motion actions
+(``pyrobots_aio.ros2.serve_create3``), so a Create 3 program runs against it.
 """
 
 from __future__ import annotations
@@ -63,7 +70,7 @@ import signal
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from pyrobots_aio.loops import run_scaled
-from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry
+from pyrobots_aio.ros2 import CREATE3, PROFILES, STANDARD, Odometry, serve_create3
 
 from ._bursts import Refusals
 from ._citizen import RosoutHandler, declare_options, uses_sim_time
@@ -292,6 +299,8 @@ async def _serve(options: argparse.Namespace, out: TextIO) -> None:
                 clock_origin=0.0 if faster else robot.time(),
                 cmd_timeout=options.cmd_timeout,
             )
+            if profile is CREATE3:
+                serve_create3(robot, ros2)
             print(
                 f"sim-node {name} ready (domain {ros2.domain_id}, x{options.rate:g} "
                 f"real time): {len(node.topics)} topics under {ros2.node.get_namespace()}",

@@ -27,6 +27,7 @@ from ._rclpy import (
     rclpy_module,
     ros_name,
 )
+from ._serve import Ros2ActionServer, Ros2ServiceServer
 from ._thread import RosThread
 from ._topics import Ros2Publisher, Ros2Subscription, ToState, check_topic_type, state_mapping
 
@@ -39,6 +40,7 @@ if TYPE_CHECKING:
 _log = logging.getLogger("pyrobots_aio.ros2")
 
 M = TypeVar("M")
+S = TypeVar("S", Ros2ActionServer, Ros2ServiceServer)
 
 
 def _positive(name: str, value: float) -> float:
@@ -144,6 +146,7 @@ class Ros2Node:
         self._subscriptions: list[Ros2Subscription] = []
         self._publishers: list[Ros2Publisher[Any]] = []
         self._clients: dict[tuple[str, type], Any] = {}
+        self._servers: list[Ros2ActionServer | Ros2ServiceServer] = []
         self._diagnostics: Diagnostics | None = None
         self._health: list[HealthMonitor] = []
 
@@ -208,6 +211,9 @@ class Ros2Node:
             sub.close()
         for pub in self._publishers:
             pub.close()
+        for server in self._servers:
+            server.close()
+        self._servers.clear()
         self._subscriptions.clear()
         self._publishers.clear()
         self._clients.clear()
@@ -390,6 +396,49 @@ class Ros2Node:
         is_action = hasattr(interface, "Goal")
         await thread.wait_until(client.server_is_ready if is_action else client.service_is_ready)
 
+    def serve_action(
+        self, name: str, action_type: type, fn: Callable[..., Any]
+    ) -> Ros2ActionServer:
+        """Serve the ROS 2 action ``name``: each goal runs ``fn`` as a pyrobots_aio action.
+
+        ``fn`` is an ``async def`` (or an `action`, with its locks) called as
+        ``fn(robot, goal, feedback)``; ``feedback(**fields)`` (or
+        ``feedback(Feedback(...))``) publishes the goal's feedback; its return
+        value (an ``action_type.Result``, or None for an empty one) is the
+        goal's result. Resources, priorities, pause and the emergency stop
+        apply to it as to any action. A goal that cannot run (the emergency
+        stop is latched, a ``wait=False`` resource is busy, the action fails at
+        its first step) is rejected, and the reason logged. A ROS 2 cancel
+        arrives in the action as ``ActionCancelled``: its cleanup runs, and the
+        goal ends CANCELED; cancelled by anything else, or failed, it ends
+        ABORTED (the reason logged).
+
+        Example:
+            >>> async def count(robot, goal, feedback):  # doctest: +SKIP
+            ...     for i in range(goal.order):
+            ...         feedback(sequence=list(range(i + 1)))
+            ...         await robot.sleep(0.1)
+            ...     return Fibonacci.Result(sequence=list(range(goal.order)))
+            >>> robot.ros2.serve_action("count", Fibonacci, count)  # doctest: +SKIP
+        """
+        return self._serve(Ros2ActionServer, name, action_type, fn)
+
+    def serve_service(self, name: str, srv_type: type, fn: Callable[..., Any]) -> Ros2ServiceServer:
+        """Serve the ROS 2 service ``name``: each request runs ``fn(robot, request)`` as an action.
+
+        Its return value (a ``srv_type.Response``) is the response, sent once
+        the action is done. Services cannot refuse: a request whose action
+        cannot run, fails or is cancelled gets an empty response, and the
+        reason is logged.
+
+        Example:
+            >>> async def reset(robot, request):  # doctest: +SKIP
+            ...     await robot.stop()
+            ...     return Trigger.Response(success=True)
+            >>> robot.ros2.serve_service("reset", Trigger, reset)  # doctest: +SKIP
+        """
+        return self._serve(Ros2ServiceServer, name, srv_type, fn)
+
     # -- internals ----------------------------------------------------------------
 
     def _client(self, name: str, interface: type) -> tuple[str, Any]:
@@ -418,6 +467,14 @@ class Ros2Node:
             )
             raise Ros2Error(msg)
         return self._thread
+
+    def _serve(self, kind: type[S], name: str, interface: type, fn: Callable[..., Any]) -> S:
+        thread = self._running_thread()
+        assert self._robot is not None  # running
+        full = str(thread.node.resolve_service_name(check_topic(name, f"{kind.kind} name")))
+        server = kind(self._robot, thread, full, interface, fn)
+        self._servers.append(server)
+        return server
 
     def _watched_keys(self) -> set[str]:
         keys = set(self._health_keys)

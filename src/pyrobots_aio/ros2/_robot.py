@@ -12,8 +12,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import Ros2Error
-from ..motion import SENSORS, DriveBase, Sensor
+from ..motion import SENSORS, Sensor
 from ._backend import DOCK_IN_ODOM, Ros2Backend
+from ._docking import ProfileDocking
 from ._node import Ros2Node, _positive
 from ._profiles import STANDARD, Profile
 from ._tf import BUILD_TF
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
     from ._topics import Ros2Publisher
 
 
-class Ros2Robot(DriveBase):
+class Ros2Robot(ProfileDocking):
     """A differential-drive robot over ROS 2: ``cmd_vel`` out, odometry and sensors in.
 
     Its backend is a `Ros2Backend`: inside ``async with``, it has a ROS 2 node
@@ -82,6 +83,10 @@ class Ros2Robot(DriveBase):
       event loop's clock — for a base running ``--rate`` times faster than real
       time, run the program on a loop at the same rate.
     - ``/diagnostics``: whether every input is fresh (`Ros2Node`).
+    - **Create 3** (``profile="create3"``): bumper and cliff keys come from
+      ``hazard_detection``, the IR ranges from ``ir_intensity``, ``docked``
+      from ``dock_status``; `dock` and `undock` are goals to the base's own
+      ``dock`` and ``undock`` action servers.
 
     Args:
         namespace: The robot's namespace (``/robot1``): its relative topics live there.
