@@ -44,6 +44,8 @@ async def test_a_create3_robot_reads_its_hazards_ir_and_dock_and_walks_unchanged
                 "hazard_detection": "hazard_detection",
                 "ir_intensity": "ir_intensity",
                 "dock_status": "dock_status",
+                "tf": "tf",
+                "tf_static": "tf_static",
             }
             assert {s.key for s in SENSORS} <= set(robot.state)
             assert robot.state.docked is True
