@@ -29,6 +29,23 @@ SKIP_REASON = (
 )
 DEADLINE = 60.0
 """Seconds any single wait may take: DDS discovery on a loaded 2-core machine can be slow."""
+PEER_SILENCE = 10.0
+"""Seconds of the wall clock a robot and its sim-node may go without a word from the other.
+
+For the tests whose subject is not that silence (stale odometry and the sim-node's
+command timeout have tests of their own). The control loop runs through two processes
+in real time, and a loaded machine starves either one: the sim-node stopped for 1 s
+at load 12 (stale odometry at ``odom_timeout`` 2 s of a 2x loop), and a test process
+held up for 0.6 s of every 0.65 s let the sim-node's 0.5 s command timeout stop the
+wheels tick after tick until the drive failed with a `StallError`. Ten times the
+longest silence seen, and a dead peer still ends a test with its own error well before
+the hang guards (`DEADLINE`, pytest's 120 s).
+"""
+
+
+def silence_options(rate: float) -> tuple[str, ...]:
+    """A sim-node's options at ``rate``: its command holds for `PEER_SILENCE` wall seconds."""
+    return ("--rate", str(rate), "--cmd-timeout", str(PEER_SILENCE * rate))
 
 
 def require_rclpy() -> None:
