@@ -7,8 +7,10 @@ tick and drives it from ``cmd_vel``, through a ROS 2 profile
 through too); any ROS 2 tool sees it, and a robot in another process (or
 on another machine) can drive it. Topic names are relative, so
 ``--namespace /robot1`` puts them under ``/robot1``; several nodes run side
-by side under different namespaces. Ctrl-C (SIGINT) or SIGTERM stops it
-cleanly (exit code 0). The ``standard`` profile's topics:
+by side under different namespaces. ``--robots N`` puts N robots in one
+world, each with its node under ``<namespace>/robotK`` (`_sim_robots`).
+Ctrl-C (SIGINT) or SIGTERM stops it cleanly (exit code 0). The ``standard``
+profile's topics:
 
 ============================  ============================  =========================
 topic                         type                          QoS
@@ -43,12 +45,15 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import math
 import signal
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from pyrobots_aio.loops import run_scaled
 from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry
+
+from ._sim_robots import add_robots_argument, sim_robots, topics_line
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -114,6 +119,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="the ROS 2 topics, types and conversions, as Ros2Robot(profile=...) takes them "
         "(default: standard)",
     )
+    add_robots_argument(node)
     node.set_defaults(command=run_sim_node)
 
 
@@ -126,6 +132,8 @@ class SimNode:
         profile: The topics, types and conversions (those `Ros2Robot` reads).
         sim_clock: Stamp with the simulation's clock and publish ``/clock``.
         cmd_timeout: Seconds a command holds before the wheels stop.
+        publish_clock: Whether this node publishes ``/clock`` (with ``sim_clock``):
+            in a world of several robots, only the first's does.
     """
 
     def __init__(
@@ -136,6 +144,7 @@ class SimNode:
         profile: Profile,
         sim_clock: bool,
         cmd_timeout: float,
+        publish_clock: bool = True,
     ):
         from builtin_interfaces.msg import Time
         from rosgraph_msgs.msg import Clock
@@ -148,7 +157,7 @@ class SimNode:
         self._odom = self._publisher(odometry)
         self._sensors = [self._publisher(t) for t in profile.sensors(robot.sensors)]
         self._status = [self._publisher(t) for t in profile.status]
-        self._clock = ros2.publisher("/clock", Clock) if sim_clock else None
+        self._clock = ros2.publisher("/clock", Clock) if sim_clock and publish_clock else None
         self._sim_clock = sim_clock
         self._command = command.message_class()
         self._cmd = ros2.subscribe(
@@ -193,44 +202,55 @@ class SimNode:
 
 async def _serve(options: argparse.Namespace, out: TextIO) -> None:
     from pyrobots_aio.ros2 import attach_ros2, profile_named
-    from pyrobots_aio.sim import SimRobot
 
     profile = profile_named(options.profile)
-    robot = SimRobot(seed=options.seed, realtime=True, control_rate=options.control_rate)
+    robots = sim_robots(options)
     sim_clock = options.rate != 1.0
-    ros2 = attach_ros2(
-        robot,
-        options.name,
-        namespace=options.namespace,
-        use_sim_time=sim_clock,
-        health_keys=("v", "w", "bumper", "docked"),
-    )
+    nodes = [
+        attach_ros2(
+            robot,
+            options.name,
+            namespace=namespace,
+            use_sim_time=sim_clock,
+            health_keys=("v", "w", "bumper", "docked"),
+        )
+        for robot, namespace in robots
+    ]
+    names = ", ".join(ros2.full_name for ros2 in nodes)
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     signals = (signal.SIGINT, signal.SIGTERM)
     for number in signals:
         loop.add_signal_handler(number, stop.set)
     try:
-        async with robot:
-            node = SimNode(
-                robot,
-                ros2,
-                profile=profile,
-                sim_clock=sim_clock,
-                cmd_timeout=options.cmd_timeout,
-            )
+        async with contextlib.AsyncExitStack() as running:
+            for robot, _ in robots:
+                await running.enter_async_context(robot)
+            sims = [
+                SimNode(
+                    robot,
+                    ros2,
+                    profile=profile,
+                    sim_clock=sim_clock,
+                    cmd_timeout=options.cmd_timeout,
+                    publish_clock=ros2 is nodes[0],  # one world, one clock
+                )
+                for (robot, _), ros2 in zip(robots, nodes, strict=True)
+            ]
+            topics = topics_line(len(sims[0].topics), [ros2.namespace for ros2 in nodes])
             print(
-                f"sim-node {ros2.full_name} ready (domain {ros2.domain_id}, x{options.rate:g} "
-                f"real time): {len(node.topics)} topics under {ros2.namespace}",
+                f"sim-node {names} ready (domain {nodes[0].domain_id}, x{options.rate:g} "
+                f"real time): {topics}",
                 file=out,
                 flush=True,
             )
             await stop.wait()
-            node.close()
+            for node in sims:
+                node.close()
     finally:
         for number in signals:
             loop.remove_signal_handler(number)
-    print(f"sim-node {ros2.full_name} stopped", file=out, flush=True)
+    print(f"sim-node {names} stopped", file=out, flush=True)
 
 
 def run_sim_node(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:

@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -186,6 +186,9 @@ class SimWorld:
         >>> round(second.odom_pose()[0], 1), round(second.base_pose()[1], 1)
         (0.2, 0.5)
     """
+
+    MAX_ROBOTS: ClassVar[int] = MAX_ROBOTS
+    """The most robots a world holds (``robots=``): seven docks fit along the arena's wall."""
 
     def __init__(
         self,
