@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterator
+    from collections.abc import Callable, Iterator, Mapping
     from types import ModuleType
 
 SKIP_REASON = (
@@ -154,13 +154,35 @@ async def meet(robot: Any, server: PlainNode, name: str, interface: type) -> Non
     await wait_for(lambda: server.knows_client(node, namespace, name, action=action))
 
 
+async def run_script(script: Path, *args: str) -> tuple[int, str, str]:
+    """Run ``python script args`` to its end (killed if cancelled): exit code, stdout, stderr."""
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        str(script),
+        *args,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    try:
+        out, err = await process.communicate()
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    return process.returncode or 0, out.decode(), err.decode()
+
+
 SIM_NODE = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]
 
 
 @contextlib.contextmanager
-def sim_node_process(*args: str) -> Iterator[subprocess.Popen[bytes]]:
+def sim_node_process(
+    *args: str, env: Mapping[str, str] | None = None
+) -> Iterator[subprocess.Popen[bytes]]:
     """A sim-node process (``args``: its options), up and ready; killed if still running after."""
-    process = subprocess.Popen([*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(
+        [*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
+    )
     try:
         assert process.stdout is not None
         ready = process.stdout.readline()
