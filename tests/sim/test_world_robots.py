@@ -61,6 +61,17 @@ def test_one_physics_each_robot_obeys_its_own_command() -> None:
     assert second.time == 7.0  # one clock
 
 
+def test_placing_one_robot_leaves_the_others_moving() -> None:
+    world = SimWorld(robots=2)
+    first, second = world.robots
+    first.set_command(0.2, 0.0)
+    world.advance(1.0)
+    moving = first.read_sensors()["v"]
+    second.place(0.0, 1.0, 0.0)
+    assert first.read_sensors()["v"] == moving
+    assert second.read_sensors()["v"] == 0.0
+
+
 def test_robots_facing_each_other_see_and_bump_into_each_other() -> None:
     world = SimWorld(robots=2)
     first, second = world.robots

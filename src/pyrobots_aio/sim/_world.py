@@ -239,6 +239,7 @@ class SimWorld:
         self._sensordata, self._ctrl = data.sensordata, data.ctrl  # views, fetched once
         body = self._layout.base_body  # the base's position and the first row of its rotation
         self._base_xpos, self._base_xmat = data.xpos[body], data.xmat[body, :4]
+        self._dofs = np.flatnonzero(model.body_rootid[model.dof_bodyid] == body)
         self._path, self._seed, self._dt = path, shared.seed, shared.dt
         self._shared, self._index = shared, index
         self._readings: list[float] = []  # sensordata of the current state, as floats
@@ -443,7 +444,7 @@ class SimWorld:
         data.qpos[qpos : qpos + 3] = (x, y, self._rest_z)
         heading = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
         mujoco.mju_mulQuat(data.qpos[qpos + 3 : qpos + 7], heading, self._rest_tilt)
-        data.qvel[:] = 0.0
+        data.qvel[self._dofs] = 0.0  # this robot's: the others keep moving
         self._forward()
         self._odometry.reset(*self._encoders())
 
