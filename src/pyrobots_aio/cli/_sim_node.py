@@ -7,8 +7,10 @@ tick and drives it from ``cmd_vel``, through a ROS 2 profile
 through too); any ROS 2 tool sees it, and a robot in another process (or
 on another machine) can drive it. Topic names are relative, so
 ``--namespace /robot1`` puts them under ``/robot1``; several nodes run side
-by side under different namespaces. Ctrl-C (SIGINT) or SIGTERM stops it
-cleanly (exit code 0). The ``standard`` profile's topics:
+by side under different namespaces. ``--robots N`` puts N robots in one
+world, each with its node under ``<namespace>/robotK`` (`_sim_robots`).
+Ctrl-C (SIGINT) or SIGTERM stops it cleanly (exit code 0). The ``standard``
+profile's topics:
 
 ============================  ============================  =========================
 topic                         type                          QoS
@@ -74,6 +76,7 @@ from pyrobots_aio.ros2 import CREATE3, PROFILES, STANDARD, Odometry, serve_creat
 
 from ._bursts import Refusals
 from ._citizen import RosoutHandler, declare_options, uses_sim_time
+from ._sim_robots import add_robots_argument, sim_robots, topics_line
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator, Mapping
@@ -151,6 +154,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="ROS arguments, as every ROS 2 node takes them, to the end of the line: "
         "-r from:=to (remapping), -p use_sim_time:=true, --log-level debug ...",
     )
+    add_robots_argument(node)
     node.set_defaults(command=run_sim_node)
 
 
@@ -164,6 +168,8 @@ class SimNode:
         sim_clock: Stamp with the simulation's clock and publish ``/clock``.
         clock_origin: The robot's time that is 0 on ``/clock``.
         cmd_timeout: Seconds a command holds before the wheels stop.
+        publish_clock: Whether this node publishes ``/clock`` (with ``sim_clock``):
+            in a world of several robots, only the first's does.
     """
 
     def __init__(
@@ -175,6 +181,7 @@ class SimNode:
         sim_clock: bool,
         clock_origin: float = 0.0,
         cmd_timeout: float,
+        publish_clock: bool = True,
     ):
         from builtin_interfaces.msg import Time
         from rosgraph_msgs.msg import Clock
@@ -188,7 +195,7 @@ class SimNode:
         self._odom = self._publisher(odometry)
         self._sensors = [self._publisher(t) for t in profile.sensors(robot.sensors)]
         self._status = [self._publisher(t) for t in profile.status]
-        self._clock = ros2.publisher("/clock", Clock) if sim_clock else None
+        self._clock = ros2.publisher("/clock", Clock) if sim_clock and publish_clock else None
         self._sim_clock, self._clock_origin = sim_clock, clock_origin
         self._command = command.message_class()
         self._cmd = ros2.subscribe(
@@ -267,52 +274,84 @@ def _sensor_frames(robot: SimRobot) -> list[tuple[str, str, NDArray[np.float64]]
 
 async def _serve(options: argparse.Namespace, out: TextIO) -> None:
     from pyrobots_aio.ros2 import attach_ros2, profile_named
-    from pyrobots_aio.sim import SimRobot
 
     profile = profile_named(options.profile)
-    robot = SimRobot(seed=options.seed, realtime=True, control_rate=options.control_rate)
     faster = options.rate != 1.0
-    ros2 = attach_ros2(
-        robot,
-        options.name,
-        namespace=options.namespace,
-        use_sim_time=True if faster else None,  # at real time, as --ros-args say
-        ros_args=options.ros_args,
-        standalone=True,
-        health_keys=("v", "w", "bumper", "docked"),
-    )
+    robots = [
+        (
+            robot,
+            attach_ros2(
+                robot,
+                options.name,
+                namespace=namespace,
+                use_sim_time=True if faster else None,  # at real time, as --ros-args say
+                ros_args=options.ros_args,
+                standalone=True,
+                health_keys=("v", "w", "bumper", "docked"),
+            ),
+        )
+        for robot, namespace in sim_robots(options)
+    ]
+    first = robots[0][1]
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     signals = (signal.SIGINT, signal.SIGTERM)
     for number in signals:
         loop.add_signal_handler(number, stop.set)
     try:
-        async with robot, _rosout(ros2):
-            name = ros2.node.get_fully_qualified_name()  # as --ros-args may have remapped it
-            declare_options(ros2.node, options)
-            node = SimNode(
-                robot,
-                ros2,
-                profile=profile,
-                sim_clock=faster or uses_sim_time(ros2.node),
-                # A faster loop's clock starts at 0; the real-time one's is the machine's.
-                clock_origin=0.0 if faster else robot.time(),
-                cmd_timeout=options.cmd_timeout,
+        async with contextlib.AsyncExitStack() as running:
+            for robot, _ in robots:
+                await running.enter_async_context(robot)
+            await running.enter_async_context(_rosout(first))  # the process's log, once
+            # A faster loop's clock starts at 0; the real-time one's is the machine's.
+            origin = 0.0 if faster else robots[0][0].time()
+            nodes = [
+                _start_node(robot, ros2, options, profile, origin, publish_clock=ros2 is first)
+                for robot, ros2 in robots
+            ]
+            # As --ros-args may have remapped them:
+            name = ", ".join(ros2.node.get_fully_qualified_name() for _, ros2 in robots)
+            topics = topics_line(
+                len(nodes[0].topics), [ros2.node.get_namespace() for _, ros2 in robots]
             )
-            if profile is CREATE3:
-                serve_create3(robot, ros2)
             print(
-                f"sim-node {name} ready (domain {ros2.domain_id}, x{options.rate:g} "
-                f"real time): {len(node.topics)} topics under {ros2.node.get_namespace()}",
+                f"sim-node {name} ready (domain {first.domain_id}, x{options.rate:g} "
+                f"real time): {topics}",
                 file=out,
                 flush=True,
             )
             await stop.wait()
-            node.close()
+            for node in nodes:
+                node.close()
     finally:
         for number in signals:
             loop.remove_signal_handler(number)
     print(f"sim-node {name} stopped", file=out, flush=True)
+
+
+def _start_node(
+    robot: SimRobot,
+    ros2: Ros2Node,
+    options: argparse.Namespace,
+    profile: Profile,
+    clock_origin: float,
+    *,
+    publish_clock: bool,
+) -> SimNode:
+    """One running robot's ROS 2 face: its parameters, topics, and a profile's servers."""
+    declare_options(ros2.node, options)
+    node = SimNode(
+        robot,
+        ros2,
+        profile=profile,
+        sim_clock=options.rate != 1.0 or uses_sim_time(ros2.node),
+        clock_origin=clock_origin,
+        cmd_timeout=options.cmd_timeout,
+        publish_clock=publish_clock,
+    )
+    if profile is CREATE3:
+        serve_create3(robot, ros2)
+    return node
 
 
 @contextlib.asynccontextmanager
