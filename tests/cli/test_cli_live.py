@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import io
 from pathlib import Path
@@ -9,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from pyrobots_aio import ActionInterrupted, Resource, Robot, action, lock
-from pyrobots_aio.cli._live import EventLines, LiveStatus, Tally
+from pyrobots_aio.cli._live import EventLines, LiveStatus, Tally, _running
 
 WHEELS = Resource("wheels")
 SOURCE = Path(__file__).read_text().splitlines()
@@ -114,3 +115,44 @@ async def test_the_live_block_is_erased_before_anything_is_written_above_it() ->
             "\x1b[3F\x1b[J"  # erased when the showing ends
         )
     assert live.isatty()
+
+
+async def _cleaning_up(cleaning: asyncio.Future[None], release: asyncio.Future[None]) -> None:
+    """Work that runs until cancelled, then takes until ``release`` to clean up."""
+    try:
+        await asyncio.Event().wait()
+    finally:
+        cleaning.set_result(None)
+        await release
+
+
+@pytest.mark.asyncio
+async def test_showing_absorbs_only_its_own_tasks_cancellation() -> None:
+    loop = asyncio.get_running_loop()
+    release = loop.create_future()
+
+    async def caller() -> str:
+        async with _running(_cleaning_up(loop.create_future(), release), "work"):
+            await asyncio.sleep(0)  # the work starts
+            release.set_result(None)
+        return "went on"
+
+    assert await caller() == "went on"
+
+
+@pytest.mark.asyncio
+async def test_cancelling_the_caller_while_it_awaits_the_task_propagates() -> None:
+    loop = asyncio.get_running_loop()
+    cleaning: asyncio.Future[None] = loop.create_future()
+
+    async def caller() -> str:
+        async with _running(_cleaning_up(cleaning, loop.create_future()), "work"):
+            await asyncio.sleep(0)  # the work starts
+        return "went on"
+
+    outer = asyncio.create_task(caller())
+    await cleaning  # the body is over: the caller awaits the task's cleanup
+    outer.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await outer
+    assert outer.cancelled()

@@ -158,6 +158,42 @@ async def test_stop_right_after_a_block_emits_its_event_once(warned: Warned) -> 
 
 
 @pytest.mark.asyncio
+async def test_a_loop_waiting_in_its_selector_past_its_beat_is_not_blocked(
+    monkeypatch: pytest.MonkeyPatch, warned: Warned, mode: str
+) -> None:
+    # The loop never gets to its beat (its reader is gone) while it waits in its selector
+    # with nothing to do: each time the thread wakes, the beat is overdue, as when a loop
+    # thread back from its select waits for the GIL on a loaded machine. It is not blocked.
+    if mode != "timers":
+        pytest.skip("polling has no beat to miss")
+    loop = asyncio.get_running_loop()
+    looked = loop.create_future()
+
+    def settle() -> None:
+        if not looked.done():
+            looked.set_result(None)
+
+    class Deadline(_blockwatch.Timer):
+        def wait(self) -> int:
+            # The thread is back for its next wait: after a report, or enough wakes.
+            if threading.current_thread() is watch._thread and (watch.blocks or watch.wakes >= 4):
+                loop.call_soon_threadsafe(settle)
+            return super().wait()
+
+    monkeypatch.setattr(_blockwatch, "Timer", Deadline)
+    watch, kept = _watch(LOADED)
+    watch.start()
+    assert watch._beat_timer is not None
+    loop.remove_reader(watch._beat_timer.fd)
+    try:
+        await looked  # in the selector, nothing else scheduled
+    finally:
+        watch.stop()
+    assert (watch.beats, watch.blocks, kept.events) == (0, 0, [])
+    assert not warned.warned.is_set()
+
+
+@pytest.mark.asyncio
 async def test_the_blocker_hook_names_the_culprit(warned: Warned) -> None:
     watch, kept = _watch(0.05, lambda task: Blocker("the arm driver", 7, "reach"))
     watch.start()

@@ -26,6 +26,9 @@ How it watches, without costing the loop (Linux):
   ``/proc/self/task/<tid>/schedstat``) does not count: the deadline is
   pushed back by that much, so that a loaded machine is not reported as
   blocking code.
+- A loop found outside any callback then (waiting in its selector, its
+  thread woken for the beat but not yet holding the GIL) is not blocked
+  either: the thread watches afresh from there.
 - Otherwise the thread reads the loop thread's stack there and then, logs
   the WARNING, and waits (on a callback it posts) for the loop to turn: one
   report per block, however long it lasts.
@@ -423,7 +426,7 @@ class BlockWatch:
 
     def _wait_on(self, deadline: Timer) -> None:
         """Sleep until the loop misses its beat by ``threshold``; report it then (Linux)."""
-        afresh = 0.0  # when the process last came back from standing still
+        afresh = 0.0  # when the watch last began afresh (see below)
         while True:
             before = self._own_queue.waited()
             deadline.wait()  # in the kernel, without the GIL
@@ -434,8 +437,14 @@ class BlockWatch:
                 if not self._look_at_idle(deadline):
                     return
                 continue
-            if self._stood_still(
-                deadline.expires, before, self._beat_at, self._beat_cpu, self._beat_queued
+            # A process that stood still is not blocked; nor is a loop outside any callback
+            # (in its selector: late to beat for want of the GIL, or it just stopped beating).
+            # Either way a block can only begin from now on.
+            if (
+                self._stood_still(
+                    deadline.expires, before, self._beat_at, self._beat_cpu, self._beat_queued
+                )
+                or self._turning()
             ):
                 afresh = time.monotonic()
             # When the beat the loop missed fell due (or the watch began afresh).

@@ -106,8 +106,14 @@ async def _running(work: Coroutine[None, None, None], name: str) -> AsyncIterato
         yield
     finally:
         task.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
+        try:
             await task
+        except asyncio.CancelledError:
+            # The task's own end is expected; the caller's cancellation (it was cancelled
+            # while waiting here, or before) is not ours to drop.
+            current = asyncio.current_task()
+            if current is not None and current.cancelling():
+                raise
 
 
 class Progress:
