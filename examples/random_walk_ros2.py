@@ -37,8 +37,12 @@ from pyrobots_aio.sim.random_walk import WalkReport, random_walk
 COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]  # pyrobots-aio sim-node
 
 
-async def main(namespace: str, moves: int, seed: int) -> WalkReport:
-    async with Ros2Robot(namespace=namespace) as robot:
+async def main(namespace: str, moves: int, seed: int, rate: float) -> WalkReport:
+    # odom_timeout is in the loop's (simulated) seconds: the default 0.5 s is a real base's
+    # bound, an eighth of a wall-clock second at 4x, which a busy machine starves the
+    # sim-node (or this script) of. Half a wall-clock second at any rate instead; the
+    # sim-node's own command timeout still stops its wheels if this script goes quiet.
+    async with Ros2Robot(namespace=namespace, odom_timeout=0.5 * rate) as robot:
         return await random_walk(robot, moves=moves, seed=seed)
 
 
@@ -80,7 +84,9 @@ if __name__ == "__main__":
     install_console_handler()
     sim_node = None if options.external else start_sim_node(options.namespace, options.rate)
     try:
-        report = run_scaled(main, options.namespace, options.moves, options.seed, rate=options.rate)
+        report = run_scaled(
+            main, options.namespace, options.moves, options.seed, options.rate, rate=options.rate
+        )
     except PyRobotsError as error:  # rclpy missing, a bad namespace: one line, no traceback
         raise SystemExit(f"random_walk_ros2.py: error: {error}") from None
     finally:

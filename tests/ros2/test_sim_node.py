@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import math
 import signal
 import sys
@@ -178,3 +179,42 @@ def test_bad_options_are_refused(capsys: pytest.CaptureFixture[str]) -> None:
         "namespace must not contain characters other than alphanumerics, '_', or '/':\n"
         "  '/robot 1'\n         ^\n"
     )
+
+
+@pytest.mark.asyncio
+async def test_ticks_caught_up_after_a_stop_are_stamped_when_the_world_was_so(
+    plain: Callable[..., PlainNode],
+) -> None:
+    """A sim-node held up (here by SIGSTOP, on a busy machine by the scheduler) catches up.
+
+    Each tick of the burst is stamped with the simulated time it stands for, not
+    with the moment it is published: between two messages the robot moved no
+    farther than its speed over their stamps (what `Ros2Robot`'s reset check trusts).
+    """
+    teleop = plain("teleop")
+    odometry = teleop.inbox("/lagging/odom", Odometry, 10_000)
+    cmd_vel, matched = teleop.publisher("/lagging/cmd_vel", Twist)
+    options = ("--namespace", "/lagging", "--rate", "4", "--cmd-timeout", "100")
+    async with asyncio.timeout(DEADLINE), sim_node(*options) as process:
+        await matched.wait()
+        cmd_vel.publish(forward(0.2))
+        await next_where(odometry, lambda o: o.twist.twist.linear.x > 0.19)
+        process.send_signal(signal.SIGSTOP)
+        await asyncio.sleep(0.5)  # two simulated seconds to catch up
+        process.send_signal(signal.SIGCONT)
+        seen = [await odometry.get()]
+        end = _seconds(seen[0]) + 4.0
+        while _seconds(seen[-1]) < end:
+            seen.append(await odometry.get())
+        code, _ = await stop(process, signal.SIGINT)
+    assert code == 0
+    for before, after in itertools.pairwise(seen):
+        elapsed = _seconds(after) - _seconds(before)
+        assert elapsed > 0
+        moved = after.pose.pose.position.x - before.pose.pose.position.x
+        speed = max(before.twist.twist.linear.x, after.twist.twist.linear.x)
+        assert moved <= speed * elapsed + 1e-4
+
+
+def _seconds(odom: Any) -> float:
+    return float(odom.header.stamp.sec + odom.header.stamp.nanosec * 1e-9)

@@ -51,7 +51,9 @@ topic                         type                          QoS
   command that is not finite stops the wheels; a burst of them is logged once
   at its start and once, with the count, at its end.
 - Stamps: the system clock in real time; the simulation's clock (which
-  ``/clock`` carries, from 0) when ``--rate`` is not 1.
+  ``/clock`` carries, from 0) when ``--rate`` is not 1. Either says when the
+  world was as published: a node held up (a busy machine) catches up tick by
+  tick, each stamped with the time it simulates, not the moment it is sent.
 
 ``--profile create3`` speaks the iRobot Create 3's interface instead
 (`pyrobots_aio.ros2.CREATE3`: ``hazard_detection``, ``ir_intensity``,
@@ -184,9 +186,10 @@ class SimNode:
         publish_clock: bool = True,
     ):
         from builtin_interfaces.msg import Time
+        from rclpy.duration import Duration
         from rosgraph_msgs.msg import Clock
 
-        self._time, self._clock_type = Time, Clock
+        self._time, self._clock_type, self._duration = Time, Clock, Duration
         self.robot, self.ros2, self.profile = robot, ros2, profile
         self._cmd_timeout = cmd_timeout
         self._stop_timer: asyncio.TimerHandle | None = None
@@ -230,9 +233,12 @@ class SimNode:
         self._stop_timer = asyncio.get_running_loop().call_later(self._cmd_timeout, self.robot.stop)
 
     def _stamp(self) -> Any:
+        """When the world was as published: a tick that runs late (catching up) is not now."""
+        world = self.robot.world.time
         if not self._sim_clock:
-            return self.ros2.node.get_clock().now().to_msg()
-        now = self.robot.time() - self._clock_origin
+            late = self._duration(nanoseconds=round((self.robot.time() - world) * 1e9))
+            return (self.ros2.node.get_clock().now() - late).to_msg()
+        now = world - self._clock_origin
         whole = math.floor(now)
         return self._time(sec=whole, nanosec=min(int((now - whole) * 1e9), 999_999_999))
 
