@@ -8,7 +8,8 @@ message's own stamp.
 
 - ``topic_to_callback_*``: a message from a sender process until a monitor
   callback runs on ``robot.state`` in a bridge process, beside a plain rclpy
-  subscription callback in a process of its own. The sender sends on both
+  subscription callback in a process of its own (a message lost on the way
+  is not counted: ``*_samples_*`` says how many came). The sender sends on both
   sides' topics at 250 Hz each, half a period apart, alternating which
   goes first; each side has its process (and its GIL) to itself;
 - ``publish_to_wire_*``: ``node.publisher(...).publish`` (what
@@ -104,16 +105,13 @@ def _send_latency() -> None:
     sys.stdin.readline()
     for publisher in publishers.values():
         _wait_matched(publisher)
-    sent: dict[str, list[int]] = {kind: [] for kind in KINDS}
     order = list(KINDS)
     for _ in range(LATENCY_N):
         order.reverse()  # neither side always first
         for kind in order:
-            stamp = time.perf_counter_ns()
-            publishers[kind].publish(Int64(data=stamp))
-            sent[kind].append(stamp)
+            publishers[kind].publish(Int64(data=time.perf_counter_ns()))
             time.sleep(PERIOD / 2)
-    print(json.dumps(sent), flush=True)
+    print("done", flush=True)
     plain.close()
 
 
@@ -139,8 +137,9 @@ def _bridge_latency() -> None:
     """The bridge: topic -> ``robot.state`` -> a monitor callback, which notes its time.
 
     A monitor callback is not given the value that fired it, so it notes only
-    when it ran; its n-th run answers the n-th message (every message fires
-    the monitor, in order), and the parent pairs it with the n-th stamp sent.
+    when it ran; its n-th run answers the n-th message delivered (every
+    message fires the monitor, in order), whose stamp the subscription's own
+    callback noted as it was delivered. Both lists go back to the parent.
     """
     asyncio.run(_bridge_latency_main())
 
@@ -153,15 +152,22 @@ async def _bridge_latency_main() -> None:
 
     robot = Robot()
     node = attach_ros2(robot, "bench_bridge_latency")
+    stamps: list[int] = []
     ran: list[int] = []
     async with robot:
-        node.subscribe("/bench/latency_bridge", Int64, {"stamp": "data"}, qos=100)
+        node.subscribe(
+            "/bench/latency_bridge",
+            Int64,
+            {"stamp": "data"},
+            callback=lambda m: stamps.append(m.data),
+            qos=100,
+        )
         robot.state.stamp = 0
         monitor = robot.whenever("stamp", increase=1, max_firing_freq=0, blocking=False)
         monitor.do(lambda: ran.append(time.perf_counter_ns()))
         print("ready", flush=True)
         await asyncio.to_thread(sys.stdin.readline)
-        print(json.dumps(ran), flush=True)
+        print(json.dumps({"stamps": stamps, "ran": ran}), flush=True)
 
 
 def _send_flood() -> None:
@@ -353,25 +359,27 @@ def _topic_to_callback() -> dict[str, float]:
     receivers = {kind: _start(f"{kind}_latency") for kind in KINDS}
     sender = _start("send_latency")
     try:
-        sent = json.loads(_tell(sender, "go"))
+        assert _tell(sender, "go").strip() == "done"
         time.sleep(0.5)  # the last messages on their way
         got = {kind: json.loads(_tell(receiver, "")) for kind, receiver in receivers.items()}
     finally:
         for process in (sender, *receivers.values()):
             process.wait()
-    if len(got["bridge"]) != len(sent["bridge"]):
+    stamps, ran = got["bridge"]["stamps"], got["bridge"]["ran"]
+    if len(ran) != len(stamps):
         msg = (
-            f"the bridge's monitor ran {len(got['bridge'])} times for {len(sent['bridge'])} "
-            "messages: its runs are paired with the stamps in order, so none may be missing"
+            f"the bridge's monitor ran {len(ran)} times for {len(stamps)} messages delivered: "
+            "its runs are paired with the messages in order, so none may be missing"
         )
         raise RuntimeError(msg)
-    bridge = [ran - stamp for ran, stamp in zip(got["bridge"], sent["bridge"], strict=True)]
+    bridge = [end - stamp for end, stamp in zip(ran, stamps, strict=True)]
     plain = got["plain"]
     return {
         **_stats("topic_to_callback_bridge", bridge),
         **_stats("topic_to_callback_plain_rclpy", plain),
         "topic_to_callback_samples_bridge": float(len(bridge)),
         "topic_to_callback_samples_plain_rclpy": float(len(plain)),
+        "topic_to_callback_sent_each": float(LATENCY_N),
         "ros2_topic_to_callback_median_ratio": statistics.median(bridge) / statistics.median(plain),
         "ros2_topic_to_callback_p99_ratio": _p99(bridge) / _p99(plain),
     }

@@ -42,7 +42,9 @@ SPIN_BOUND = 0.5
 `RosThread.stop` wakes the executor (``executor.shutdown``), but on a loaded
 machine that wake-up was once lost: the thread slept on in its wait set, and
 the robot's exit waited for it forever. Looking again this often bounds the
-exit; a node with nothing to do then only goes back to its wait.
+exit; a node with nothing to do then only goes back to its wait. The bound is
+a timer of the node's own, made once: a timeout given to ``spin_once`` would
+make rclpy build a timer at every wake-up, one per message received.
 """
 JOIN_BOUND = 5.0
 """Seconds the loop waits for the ROS thread to end once its exit was cancelled."""
@@ -57,6 +59,15 @@ def _settle(
         future.set_exception(error)
     else:
         future.set_result(result)
+
+
+def _nothing() -> None:
+    """The SPIN_BOUND timer's callback: its firing alone ends the executor's wait."""
+
+
+def _steady_clock() -> Any:
+    clock = rclpy_module("rclpy.clock")
+    return clock.Clock(clock_type=clock.ClockType.STEADY_TIME)
 
 
 def _fail_quietly(future: asyncio.Future[Any], error: BaseException) -> None:
@@ -186,9 +197,10 @@ class RosThread:
     def _spin(self, executor: Any) -> None:
         """``executor.spin()``, except that a callback that raises does not stop the node."""
         # As rclpy's spin() loops, and our own stop flag besides (see SPIN_BOUND).
+        self.node.create_timer(SPIN_BOUND, _nothing, clock=_steady_clock())
         while not self._stopping and executor.context.ok() and not executor._is_shutdown:
             try:
-                executor.spin_once(timeout_sec=SPIN_BOUND)
+                executor.spin_once()
             except Exception:  # rclpy re-raises a callback's error here: log it, go on
                 _log.exception("a ROS 2 callback of node %s failed", self.name)
 
@@ -257,9 +269,9 @@ class RosThread:
         with self._lock:
             self._waiters.append((ready, future))
             if self._recheck is None:
-                clock = rclpy_module("rclpy.clock")
-                steady = clock.Clock(clock_type=clock.ClockType.STEADY_TIME)
-                self._recheck = self.node.create_timer(RECHECK_PERIOD, self._check, clock=steady)
+                self._recheck = self.node.create_timer(
+                    RECHECK_PERIOD, self._check, clock=_steady_clock()
+                )
             else:
                 self._recheck.reset()
         try:
