@@ -528,7 +528,7 @@ def _flood() -> dict[str, float]:
                 wanted = search.next_rate()
                 burst = json.loads(_tell(sender, f"{kind} {wanted}"))
                 got = int(_tell(receivers[kind], str(burst["sent"])))
-                search.record(wanted, burst["rate"], burst["sent"] - got)
+                search.record(wanted, burst["rate"], max(0, burst["sent"] - got))
                 trials[kind] += 1
     finally:
         for process in (sender, *receivers.values()):

@@ -2,11 +2,15 @@
 
 rclpy 9 has no asyncio executor, so the bridge runs rclpy's
 ``SingleThreadedExecutor`` on a dedicated thread and hands everything that
-arrives there (messages, service responses, goal results) to the event loop
-with ``loop.call_soon_threadsafe``: the loop never polls and never blocks on
-rclpy. The thread creates the context and node itself (a DDS participant
-takes tens of milliseconds to come up) and tears them down when the
-executor stops, so `RosThread.stop` leaves no thread, node or context behind.
+arrives there (service responses, goal results, graph events) to the event
+loop with ``loop.call_soon_threadsafe``: the loop never polls and never
+blocks on rclpy. The bridge's subscriptions are the exception: the node's
+`Receiver` takes their messages on a thread of its own, cheaper per message
+than the executor (see `_receiver`).
+
+The thread creates the context and node itself (a DDS participant takes
+tens of milliseconds to come up) and tears them down when the executor
+stops, so `RosThread.stop` leaves no thread, node or context behind.
 
 Each node has its own context (never rclpy's global default one): two robots
 in one process, or two tests in a row, share nothing, and neither installs
@@ -22,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._exceptions import Ros2Error
 from ._rclpy import rclpy_module
+from ._receiver import Receiver
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -102,6 +107,7 @@ class RosThread:
         self.use_sim_time = use_sim_time
         self.ros_args = ros_args
         self.node: Any = None
+        self.receiver: Any = None  # the Receiver of the node's subscriptions, made with it
         self._context: Any = None
         self._executor: Any = None
         self._thread: threading.Thread | None = None
@@ -221,6 +227,7 @@ class RosThread:
             start_parameter_services=False,
             parameter_overrides=[parameter.Parameter("use_sim_time", value=self.use_sim_time)],
         )
+        self.receiver = Receiver(self.name, context, SPIN_BOUND)
         executor = executors.SingleThreadedExecutor(context=context)
         executor.add_node(self.node)
         return executor
@@ -230,11 +237,13 @@ class RosThread:
             executor, self._executor = self._executor, None
         if executor is not None:
             executor.shutdown(timeout_sec=0)
+        if self.receiver is not None:
+            self.receiver.stop(JOIN_BOUND)
         if self.node is not None:
             self.node.destroy_node()
         if self._context is not None:
             self._context.try_shutdown()
-        self.node = self._context = self._recheck = None
+        self.node = self._context = self._recheck = self.receiver = None
 
     # -- handing work over --------------------------------------------------------
 
