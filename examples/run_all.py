@@ -11,6 +11,11 @@ from pathlib import Path
 HERE = Path(__file__).parent
 TIME_LIMIT = 600
 NEEDS = {
+    "create3_walk.py": (
+        "irobot_create_msgs",
+        'the ROS 2 wheels and the Create 3\'s interfaces: pip install -e ".[sim,ros2-build]" '
+        "&& pyrobots-aio ros2 interfaces build",
+    ),
     "random_walk_ros2.py": ("rclpy", 'the ROS 2 wheels: pip install -e ".[sim,ros2]"'),
 }
 """Examples that need an optional extra: the module they import, and what to install."""

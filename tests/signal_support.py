@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import select
 import subprocess
 import time
 from pathlib import Path
@@ -12,10 +13,24 @@ if TYPE_CHECKING:
     import signal
     from collections.abc import Iterator, Sequence
 
-HANG_GUARD = 15.0
-"""Seconds a signalled process gets to end: far more than an orderly stop takes, and less
-than the 30 s cleanup of the scripts in tests/cli/test_cli_signals.py, which a second signal
-must cut short."""
+HANG_GUARD = 60.0
+"""Seconds a signalled process gets to end: a deadlock guard, not a measure of speed.
+
+An orderly stop takes 0.3 s on a quiet machine and 2 to 3 s with four at once beside a
+CPU hog on each core (load 17): the guard leaves room for a machine twice as loaded and
+then some. It is longer than the 30 s cleanup of the scripts in
+tests/cli/test_cli_signals.py, so a second signal that fails to cut one short shows in
+the recording (the loop's own clock), not as a race against this wall clock."""
+STARTUP_GUARD = 60.0
+"""Seconds a process gets to print its first line: importing MuJoCo took 11 s at load 30."""
+
+
+def first_line(child: subprocess.Popen[str]) -> str:
+    """The first line ``child`` prints, waited for at most `STARTUP_GUARD` seconds."""
+    assert child.stdout is not None
+    ready, _, _ = select.select([child.stdout], [], [], STARTUP_GUARD)
+    assert ready, f"no line from {child.args} in {STARTUP_GUARD:g} s"
+    return child.stdout.readline()
 
 
 def wait_delivered(child: subprocess.Popen[str], signum: signal.Signals) -> None:

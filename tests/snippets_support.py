@@ -24,6 +24,8 @@ FENCE = re.compile(r"^```(?P<info>[^`\n]*)\n(?P<code>.*?)^```", re.MULTILINE | r
 RUN_ELSEWHERE = {
     "ros2": "it drives a sim-node in another process: tests/ros2/test_readme_ros2.py runs it",
     "ros2-robot": "it walks a sim-node in another process: tests/ros2/test_readme_ros2.py runs it",
+    "ros2-create3": "it walks a Create 3 sim-node: tests/ros2/test_readme_ros2.py runs it",
+    "ros2-serve": "it serves an action beside a sim-node: tests/ros2/test_readme_ros2.py runs it",
 }
 # marker -> why a block so marked never runs
 SHOWN_ONLY = {

@@ -64,6 +64,7 @@ from ._exceptions import ModelLoadError as ModelLoadError
 from ._exceptions import MotionError as MotionError
 from ._exceptions import PoseError as PoseError
 from ._exceptions import PyRobotsError as PyRobotsError
+from ._exceptions import QosMismatchError as QosMismatchError
 from ._exceptions import RecordingError as RecordingError
 from ._exceptions import ResourceDeadlockError as ResourceDeadlockError
 from ._exceptions import ResourceError as ResourceError
@@ -171,6 +172,7 @@ __all__ = [
     "PoseLike",
     "PoseManager",
     "PyRobotsError",
+    "QosMismatchError",
     "RecordingError",
     "Resource",
     "ResourceAcquired",

@@ -40,6 +40,7 @@ PyRobotsError
     ├── Ros2UnavailableError      rclpy is not installed (also an ImportError)
     ├── Ros2NameError             a name ROS 2 rejects, with its reason (also a ValueError)
     ├── TopicTypeError            a topic that carries another type (also a TypeError)
+    ├── QosMismatchError          a topic's two ends whose QoS cannot match (both named)
     ├── GoalError                 a ROS 2 goal that did not succeed (.status)
     │   └── GoalRejectedError     the action server refused the goal
     └── InterfaceBuildError       interface packages that cannot be built (what is missing)
@@ -401,6 +402,14 @@ class Ros2NameError(Ros2Error, ValueError):
 
 class TopicTypeError(Ros2Error, TypeError):
     """A topic used with a message type other than the one it carries; both are named."""
+
+
+class QosMismatchError(Ros2Error):
+    """A publisher and a subscription of one topic whose QoS profiles cannot match; both named.
+
+    DDS never delivers between them (a best-effort publisher, a reliable
+    subscription): without this error, the subscription would just stay silent.
+    """
 
 
 class GoalError(Ros2Error):

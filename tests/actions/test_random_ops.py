@@ -467,7 +467,6 @@ def check_outcome(world: World, handle: ActionHandle[int]) -> None:
 @pytest.mark.asyncio
 @settings(
     max_examples=400,
-    deadline=None,
     derandomize=True,
     database=None,
     phases=[Phase.generate, Phase.shrink],  # no explain phase: it traces, slowly

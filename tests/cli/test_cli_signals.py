@@ -5,12 +5,15 @@ a signal that lands at a bad moment is rare in any one run: each test runs the
 program many times (a few at once, which also varies the timing), signals it
 after a random delay, and a second time after a random gap of 0 to 300 ms (and
 not before the first was delivered: two pending signals of one kind merge). The
-processes get a generous hang guard: the point is that they end at all, and
-before the cleanup they were interrupted in would have ended by itself.
+processes get a generous hang guard: the point is that they end at all. That a
+second signal cut a cleanup short is read from the recording, in the loop's
+own time; and each test's pytest timeout is the sum of the hang guards of the
+runs it makes, so that a loaded machine makes it slower, never failed.
 """
 
 from __future__ import annotations
 
+import math
 import random
 import re
 import signal
@@ -25,7 +28,7 @@ import pytest
 
 from pyrobots_aio import EventKind
 from pyrobots_aio.recording import load
-from signal_support import HANG_GUARD, wait_delivered
+from signal_support import HANG_GUARD, STARTUP_GUARD, first_line, wait_delivered
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -35,8 +38,25 @@ if TYPE_CHECKING:
 DEMO = [sys.executable, "-m", "pyrobots_aio.cli", "demo", "random-walk", "--realtime", "-v"]
 AT_ONCE = 4
 """Processes run side by side."""
+DELAY, GAP = 0.5, 0.3
+"""The longest wait before the first signal, and between the first and the second."""
+RUN_BOUND = STARTUP_GUARD + DELAY + GAP + 2 * HANG_GUARD  # its first line, waits, ending
+CLEANUP = 30.0
+"""Seconds (of the loop's clock) the scripts' cleanup lasts unless a second signal cuts it."""
 
-SCRIPT = """
+
+def runs_guard(runs: int, at_once: int = AT_ONCE) -> pytest.MarkDecorator:
+    """A pytest timeout for ``runs`` signalled runs, ``at_once`` at a time: their bounds added.
+
+    The suite's default (120 s) is a hang guard for one test's own work; these
+    tests start a process per run, and a loaded machine slows each start and
+    ending several times over (20 runs one after another took more than 120 s
+    beside a CPU hog on each core).
+    """
+    return pytest.mark.timeout(math.ceil(runs / at_once) * RUN_BOUND)
+
+
+SCRIPT = f"""
 import asyncio
 import contextlib
 import sys
@@ -58,10 +78,10 @@ async def walk(robot):
     try:
         await random_walk(robot, moves=100)
     except ActionCancelled:
-        # A long and busy cleanup: short actions one after another for 30 s (the loop
-        # is never idle, so a signal lands in the middle of things), bounded by
+        # A long and busy cleanup: short actions one after another for {CLEANUP:g} s (the
+        # loop is never idle, so a signal lands in the middle of things), bounded by
         # cancel_grace=120 only; a second signal must cut it short.
-        end = robot.time() + 30.0
+        end = robot.time() + {CLEANUP}
         while robot.time() < end:
             await blink(robot)
         raise
@@ -105,12 +125,11 @@ def _signalled(
     command: Sequence[str], path: Path, signals: Sequence[signal.Signals], rng: random.Random
 ) -> Run:
     """Start ``command``, wait for its first line, send ``signals`` with random delays."""
-    delay, gap = rng.uniform(0.0, 0.5), rng.uniform(0.0, 0.3)
+    delay, gap = rng.uniform(0.0, DELAY), rng.uniform(0.0, GAP)
     with subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     ) as child:
-        assert child.stdout is not None
-        first = child.stdout.readline()  # the robot runs
+        first = first_line(child)  # the robot runs
         waits = [delay] + [gap] * (len(signals) - 1)
         sent: signal.Signals | None = None
         for wait, signum in zip(waits, signals, strict=True):
@@ -159,6 +178,15 @@ def _check_recording(run: Run) -> Recording:
     return recording
 
 
+def _check_cut_short(recording: Recording, run: Run) -> None:
+    """The walk ended before its cleanup would have ended by itself: the second signal cut it."""
+    walk = [e for e in recording.events if e.name == "walk"]
+    cancelled = next(e.time for e in walk if e.kind is EventKind.CANCEL_REQUESTED)
+    [finished] = [e.time for e in walk if e.kind is EventKind.ACTION_FINISHED]
+    assert finished - cancelled < CLEANUP, run
+
+
+@runs_guard(40)
 def test_a_second_ctrl_c_ends_the_demo_with_its_recording_closed(tmp_path: Path) -> None:
     # Before: a second Ctrl-C raised KeyboardInterrupt wherever it landed, and the exit
     # code depended on where (130, or -2 when it came during the interpreter's exit).
@@ -170,6 +198,7 @@ def test_a_second_ctrl_c_ends_the_demo_with_its_recording_closed(tmp_path: Path)
         _check_recording(run)
 
 
+@runs_guard(6 + 6)
 def test_sigterm_stops_the_demo_in_order_and_exits_143(tmp_path: Path) -> None:
     # Before: SIGTERM killed the process at once: no cleanup, no end record, and up to
     # 1 s of events lost in the recorder's buffer.
@@ -195,6 +224,7 @@ def test_sigterm_stops_the_demo_in_order_and_exits_143(tmp_path: Path) -> None:
         assert 0.0 <= float(found.group(1)) <= recording.duration, run
 
 
+@runs_guard(16)
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
 @pytest.mark.parametrize("mode", ["guarded", "plain"])
 def test_a_second_signal_cuts_a_scripts_cleanup_short(
@@ -217,8 +247,10 @@ def test_a_second_signal_cuts_a_scripts_cleanup_short(
             e for e in recording.events if e.name == "walk" and e.kind.value == "action.finished"
         ]
         assert [e.data["outcome"] for e in walk] == ["cancelled"], run
+        _check_cut_short(recording, run)
 
 
+@runs_guard(20, at_once=1)
 def test_a_second_ctrl_c_ends_a_plain_asyncio_run_script(tmp_path: Path) -> None:
     script = tmp_path / "walk.py"
     script.write_text(SCRIPT, encoding="utf-8")
@@ -229,7 +261,7 @@ def test_a_second_ctrl_c_ends_a_plain_asyncio_run_script(tmp_path: Path) -> None
             [sys.executable, str(script), "plain", str(path)], path, [signal.SIGINT] * 2, rng
         )
         assert run.returncode == -signal.SIGINT, run
-        _check_recording(run)
+        _check_cut_short(_check_recording(run), run)
 
 
 def test_stop_on_signals_leaves_signals_the_program_handles_alone(tmp_path: Path) -> None:

@@ -279,7 +279,7 @@ def test_random_walk_ros2_without_rclpy_says_so_without_a_traceback(
         )
 
 
-@pytest.mark.parametrize("name", ["kindergarten", "random_walk_ros2"])
+@pytest.mark.parametrize("name", ["kindergarten", "random_walk_ros2", "create3_walk"])
 def test_every_option_of_an_example_has_help(name: str) -> None:
     tree = ast.parse((EXAMPLES / f"{name}.py").read_text())
     options = [

@@ -7,7 +7,7 @@ from collections.abc import Collection
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from pyrobots_aio import InvalidPoseError, PoseError, UnknownFrameError
@@ -301,7 +301,6 @@ coords = st.floats(-100.0, 100.0)
 poses_in_odom = st.builds(Pose.from_euler, coords, coords, coords, angles, angles, angles)
 
 
-@settings(deadline=None)
 @given(poses_in_odom, poses_in_odom, poses_in_odom)
 def test_frame_a_to_b_to_a_round_trip(odom: Pose, base: Pose, p: Pose) -> None:
     """A pose in base_link, expressed in map then odom then back, within TOL (1e-9)."""

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from pyrobots_aio import InvalidPoseError, UnknownFrameError
@@ -113,7 +113,6 @@ def test_pantilt_defaults_to_base_link() -> None:
 coords = st.floats(-10.0, 10.0)
 
 
-@settings(deadline=None)
 @given(st.tuples(coords, coords, coords).filter(lambda p: math.hypot(*p) > 1e-3))
 def test_pantilt_points_the_x_axis_at_the_target(target: tuple[float, float, float]) -> None:
     """Yaw by pan then pitch by tilt (sxyz (0, tilt, pan)) turns +x towards the target."""

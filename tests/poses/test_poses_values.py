@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from pyrobots_aio import InvalidPoseError, PoseError
@@ -217,7 +217,6 @@ def test_long_values_are_shortened_in_messages() -> None:
     )
 
 
-@settings(deadline=None)
 @given(positions, eulers)
 def test_euler_matrix_quaternion_round_trip(
     position: tuple[float, float, float], euler: tuple[float, float, float]
@@ -236,7 +235,6 @@ def test_euler_matrix_quaternion_round_trip(
     )
 
 
-@settings(deadline=None)
 @given(positions, unit_quaternions())
 def test_quaternion_matrix_euler_round_trip(
     position: tuple[float, float, float], q: tuple[float, float, float, float]

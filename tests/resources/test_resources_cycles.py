@@ -252,7 +252,7 @@ async def run_nested(specs: list[tuple[int, int, int, int]]) -> None:
     assert outcomes.count(Outcome.FAILED) == len(refused)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(
     st.lists(
         st.tuples(st.integers(0, 2), st.integers(0, 1), st.integers(0, 3), st.integers(0, 3)),

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import pytest
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from pyrobots_aio import ActionHandle, Outcome, Robot, action
@@ -241,7 +241,7 @@ async def run_program(ops: list[Spawn | Cancel | Tick]) -> None:
     assert not left
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300)
 @given(st.lists(OPS, min_size=1, max_size=30))
 @example(  # a borrower lending onward cancelled: its lender got the leaf back too early
     [

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterator
+    from collections.abc import Callable, Iterator, Mapping
     from types import ModuleType
 
 SKIP_REASON = (
@@ -29,6 +29,23 @@ SKIP_REASON = (
 )
 DEADLINE = 60.0
 """Seconds any single wait may take: DDS discovery on a loaded 2-core machine can be slow."""
+PEER_SILENCE = 10.0
+"""Seconds of the wall clock a robot and its sim-node may go without a word from the other.
+
+For the tests whose subject is not that silence (stale odometry and the sim-node's
+command timeout have tests of their own). The control loop runs through two processes
+in real time, and a loaded machine starves either one: the sim-node stopped for 1 s
+at load 12 (stale odometry at ``odom_timeout`` 2 s of a 2x loop), and a test process
+held up for 0.6 s of every 0.65 s let the sim-node's 0.5 s command timeout stop the
+wheels tick after tick until the drive failed with a `StallError`. Ten times the
+longest silence seen, and a dead peer still ends a test with its own error well before
+the hang guards (`DEADLINE`, pytest's 120 s).
+"""
+
+
+def silence_options(rate: float) -> tuple[str, ...]:
+    """A sim-node's options at ``rate``: its command holds for `PEER_SILENCE` wall seconds."""
+    return ("--rate", str(rate), "--cmd-timeout", str(PEER_SILENCE * rate))
 
 
 def require_rclpy() -> None:
@@ -154,13 +171,35 @@ async def meet(robot: Any, server: PlainNode, name: str, interface: type) -> Non
     await wait_for(lambda: server.knows_client(node, namespace, name, action=action))
 
 
+async def run_script(script: Path, *args: str) -> tuple[int, str, str]:
+    """Run ``python script args`` to its end (killed if cancelled): exit code, stdout, stderr."""
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        str(script),
+        *args,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    try:
+        out, err = await process.communicate()
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    return process.returncode or 0, out.decode(), err.decode()
+
+
 SIM_NODE = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]
 
 
 @contextlib.contextmanager
-def sim_node_process(*args: str) -> Iterator[subprocess.Popen[bytes]]:
+def sim_node_process(
+    *args: str, env: Mapping[str, str] | None = None
+) -> Iterator[subprocess.Popen[bytes]]:
     """A sim-node process (``args``: its options), up and ready; killed if still running after."""
-    process = subprocess.Popen([*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(
+        [*SIM_NODE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
+    )
     try:
         assert process.stdout is not None
         ready = process.stdout.readline()

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import re
-import sys
 from pathlib import Path
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy
+from ros2_support import DEADLINE, require_rclpy, run_script
 
 require_rclpy()
 pytest.importorskip(
@@ -20,26 +19,11 @@ EXAMPLE = Path(__file__).parent.parent.parent / "examples" / "random_walk_ros2.p
 
 @pytest.mark.asyncio
 async def test_the_example_walks_a_sim_node_over_ros2_bumps_and_docks() -> None:
-    process = await asyncio.create_subprocess_exec(
-        sys.executable,
-        str(EXAMPLE),
-        "--namespace",
-        "/example",
-        "--moves",
-        "5",
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.PIPE,
-    )
-    try:
-        async with asyncio.timeout(DEADLINE * 2):
-            out, err = await process.communicate()
-    finally:
-        if process.returncode is None:
-            process.kill()
-            await process.wait()
-    told = f"stdout:\n{out.decode()}\nstderr (end):\n{err.decode()[-3000:]}"
-    assert process.returncode == 0, told
-    lines = out.decode().splitlines()
+    async with asyncio.timeout(DEADLINE * 2):
+        code, out, err = await run_script(EXAMPLE, "--namespace", "/example", "--moves", "5")
+    told = f"stdout:\n{out}\nstderr (end):\n{err[-3000:]}"
+    assert code == 0, told
+    lines = out.splitlines()
     assert re.fullmatch(
         r"sim-node /example/sim_node ready \(domain \d+, x4 real time\): .*", lines[0]
     )
@@ -52,4 +36,4 @@ async def test_the_example_walks_a_sim_node_over_ros2_bumps_and_docks() -> None:
     # Seed 0 runs into a wall: the reflex preempted a move, and the walk went on to its end.
     assert int(summary[1]) >= 1, told
     assert int(summary[2]) >= 1, told
-    assert "ROS 2 node /example/pyrobots_aio up" in err.decode()
+    assert "ROS 2 node /example/pyrobots_aio up" in err

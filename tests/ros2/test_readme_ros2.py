@@ -30,13 +30,18 @@ def _snippets(marker: str) -> list[str]:
 
 SNIPPETS = _snippets("ros2")
 ROBOT_SNIPPETS = _snippets("ros2-robot")
+SERVE_SNIPPETS = _snippets("ros2-serve")
+CREATE3_SNIPPETS = _snippets("ros2-create3")
 
 
 def test_the_readme_has_a_ros2_snippet() -> None:
     assert len(SNIPPETS) == 1
     assert len(ROBOT_SNIPPETS) == 1
+    assert len(SERVE_SNIPPETS) == 1
+    assert len(CREATE3_SNIPPETS) == 1
     for document in (d for d in DOCUMENTS if blocks(d, "python", "ros2")):
         text = document.read_text()
+        assert "pyrobots-aio sim-node --namespace /robot1 --profile create3 --rate 4" in text
         assert "pyrobots-aio sim-node --namespace /robot1 --rate 4" in text
         assert "pyrobots-aio sim-node --namespace /robot1" in text
 
@@ -61,14 +66,17 @@ async def test_the_ros2_snippet_drives_a_sim_node(tmp_path: Path) -> None:
 
 
 @pytest.mark.asyncio
-async def test_the_ros2_robot_snippet_walks_a_sim_node(tmp_path: Path) -> None:
+@pytest.mark.parametrize("profile", ["standard", "create3"])
+async def test_the_ros2_robot_snippets_walk_a_sim_node(tmp_path: Path, profile: str) -> None:
     import signal
 
+    if profile == "create3":
+        pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
     script = tmp_path / "walk.py"
-    script.write_text(ROBOT_SNIPPETS[0])
+    script.write_text((ROBOT_SNIPPETS if profile == "standard" else CREATE3_SNIPPETS)[0])
     async with (
         asyncio.timeout(DEADLINE * 2),
-        sim_node("--namespace", "/robot1", "--rate", "4") as node,
+        sim_node("--namespace", "/robot1", "--rate", "4", "--profile", profile) as node,
     ):
         user = await asyncio.create_subprocess_exec(
             sys.executable,
@@ -79,4 +87,24 @@ async def test_the_ros2_robot_snippet_walks_a_sim_node(tmp_path: Path) -> None:
         out, err = await user.communicate()
         assert user.returncode == 0, err.decode()
         assert out.decode() == "3 moves, docked: True\n"
+        assert (await stop(node, signal.SIGINT))[0] == 0
+
+
+@pytest.mark.asyncio
+async def test_the_served_action_snippet_turns_a_sim_node(tmp_path: Path) -> None:
+    import signal
+
+    pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+    script = tmp_path / "serve.py"
+    script.write_text(SERVE_SNIPPETS[0])
+    async with asyncio.timeout(DEADLINE), sim_node("--namespace", "/robot1") as node:
+        user = await asyncio.create_subprocess_exec(
+            sys.executable,
+            str(script),
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        out, err = await user.communicate()
+        assert user.returncode == 0, err.decode()
+        assert re.fullmatch(r"turned to 1\.0\d rad\n", out.decode())
         assert (await stop(node, signal.SIGINT))[0] == 0

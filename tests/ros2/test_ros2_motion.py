@@ -20,7 +20,13 @@ import itertools
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from ros2_support import load_suite, require_rclpy, sim_node_process
+from ros2_support import (
+    PEER_SILENCE,
+    load_suite,
+    require_rclpy,
+    silence_options,
+    sim_node_process,
+)
 
 require_rclpy()
 pytest.importorskip(
@@ -35,7 +41,7 @@ if TYPE_CHECKING:
     from collections.abc import Iterator
 
 LOOP_RATE = 2.0
-ODOM_TIMEOUT = 2.0
+ODOM_TIMEOUT = PEER_SILENCE * LOOP_RATE
 """Seconds (of this loop's time) without odometry before the base counts it stale."""
 START = SimWorld().base_pose()  # where the sim-node's robot starts, in the map: odom's origin
 Base = load_suite("motion_conftest", "conftest").Base
@@ -85,12 +91,11 @@ test_a_bump_on_the_dock_turns_away_without_backing_into_the_dock = (
 def base() -> Iterator[Any]:
     """A fresh sim-node at `LOOP_RATE`, and how to make a `Ros2Robot` driving it."""
     namespace = f"/motion{next(_namespaces)}"
-    with sim_node_process("--namespace", namespace, "--rate", str(LOOP_RATE)) as process:
+    with sim_node_process("--namespace", namespace, *silence_options(LOOP_RATE)) as process:
 
         def make(**options: Any) -> DriveBase:
-            # Staleness is tested on its own (test_ros2_robot*.py); here a sim-node in
-            # another process on two shared cores may pause longer than the default
-            # 0.5 s of this faster loop's time (0.25 s of the wall clock).
+            # Staleness is tested on its own (test_ros2_robot*.py); here either process
+            # may be starved for longer than the default 0.5 s (see PEER_SILENCE).
             options.setdefault("odom_timeout", ODOM_TIMEOUT)
             return Ros2Robot(namespace=namespace, odom_in_map=START, **options)
 

@@ -13,7 +13,15 @@ require_rclpy()
 from builtin_interfaces.msg import Time  # noqa: E402
 
 from pyrobots_aio.motion import SENSORS  # noqa: E402
-from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry, Profile, Ros2Robot  # noqa: E402
+from pyrobots_aio.ros2 import (  # noqa: E402
+    CREATE3,
+    IR_MAX_INTENSITY,
+    PROFILES,
+    STANDARD,
+    Odometry,
+    Profile,
+    Ros2Robot,
+)
 
 STAMP = Time(sec=12, nanosec=500_000_000)
 STATE = {
@@ -64,17 +72,71 @@ def test_the_battery_status_reads_back_what_it_sent() -> None:
 
 
 def test_a_second_profile_sits_beside_the_standard_one_and_names_the_topics() -> None:
-    assert PROFILES == {"standard": STANDARD}
+    assert PROFILES == {"standard": STANDARD, "create3": CREATE3}
     renamed = dataclasses.replace(
         STANDARD,
         name="renamed",
         command=dataclasses.replace(STANDARD.command, name="base/cmd_vel"),
     )
     assert isinstance(renamed, Profile)
-    robot = Ros2Robot(profile=renamed, sensors=[])
+    robot = Ros2Robot(profile=renamed, sensors=[], tf=False)
     assert robot.ros.topics == {"cmd_vel": "base/cmd_vel", "odom": "odom"}
-    assert Ros2Robot(profile="standard").ros.topics == {
+    assert Ros2Robot(profile="standard", tf=True).ros.topics == {
         "cmd_vel": "cmd_vel",
         "odom": "odom",
         **{s.key: s.key for s in SENSORS},
+        "tf": "tf",
+        "tf_static": "tf_static",
+    }
+
+
+def create3_topics() -> dict[str, object]:
+    pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+    return {t.role: t for t in CREATE3.sensors(SENSORS)}
+
+
+def test_the_create3_topics_read_back_what_they_sent() -> None:
+    topics = create3_topics()
+    assert list(topics) == ["hazard_detection", "ir_intensity", "dock_status"]
+    read: dict[str, object] = {}
+    for topic in CREATE3.sensors(SENSORS):
+        read.update(topic.decode(topic.encode(topic.message_class(), STATE, STAMP)))
+    assert read == pytest.approx({key: value for key, value in STATE.items() if key != "battery"})
+    assert (CREATE3.odometry.qos, CREATE3.command.qos) == ("sensor_data", "default")
+
+
+def test_create3_hazards_are_bumps_with_the_bumpers_frame_and_cliffs_with_the_cliffs() -> None:
+    hazards = CREATE3.sensors(SENSORS)[0]
+    vector = hazards.encode(hazards.message_class(), STATE, STAMP)
+    assert [(d.type, d.header.frame_id) for d in vector.detections] == [
+        (1, "bump_front_right"),  # HazardDetection.BUMP
+        (2, "cliff_side_left"),  # HazardDetection.CLIFF
+    ]
+    assert vector.detections[0].header.stamp == STAMP
+    center = type(vector.detections[0])(type=1)
+    center.header.frame_id = "bump_front_center"
+    stall = type(vector.detections[0])(type=3)  # STALL: not a sensor of the table
+    stall.header.frame_id = "left_wheel"
+    read = hazards.decode(hazards.message_class()(detections=[center, stall]))
+    assert {k: v for k, v in read.items() if v} == {
+        "bumper": True,
+        "bumper_left": True,
+        "bumper_right": True,
+    }
+    assert not any(hazards.decode(hazards.message_class()()).values())
+
+
+def test_create3_ir_intensities_are_higher_when_closer_named_by_the_create3_frames() -> None:
+    ir = CREATE3.sensors(SENSORS)[1]
+    state = {**STATE, "ir_front_left": 0.0, "ir_right": 0.3}
+    vector = ir.encode(ir.message_class(), state, STAMP)
+    values = {r.header.frame_id: r.value for r in vector.readings}
+    assert values == {
+        "ir_intensity_side_left": 2750,
+        "ir_intensity_left": 0,
+        "ir_intensity_front_left": IR_MAX_INTENSITY,
+        "ir_intensity_front_center_left": 2750,
+        "ir_intensity_front_center_right": 2750,
+        "ir_intensity_front_right": 2750,
+        "ir_intensity_right": 1000,
     }

@@ -11,7 +11,14 @@ import signal
 from typing import TYPE_CHECKING
 
 import pytest
-from ros2_support import DEADLINE, assert_stale_error, require_rclpy, sim_node_process
+from ros2_support import (
+    DEADLINE,
+    PEER_SILENCE,
+    assert_stale_error,
+    require_rclpy,
+    silence_options,
+    sim_node_process,
+)
 
 require_rclpy()
 pytest.importorskip(
@@ -73,13 +80,13 @@ async def test_a_sim_node_killed_mid_walk_makes_the_walk_fail_stale_not_hang(
 
 async def test_two_robots_in_two_sim_nodes_are_driven_from_one_executive() -> None:
     with (
-        sim_node_process("--namespace", "/robot1", *RATE),
-        sim_node_process("--namespace", "/robot2", "--seed", "2", *RATE),
+        sim_node_process("--namespace", "/robot1", *silence_options(LOOP_RATE)),
+        sim_node_process("--namespace", "/robot2", "--seed", "2", *silence_options(LOOP_RATE)),
     ):
         async with (
             asyncio.timeout(TIMEOUT),
-            Ros2Robot(namespace="/robot1") as one,
-            Ros2Robot(namespace="/robot2") as two,
+            Ros2Robot(namespace="/robot1", odom_timeout=PEER_SILENCE * LOOP_RATE) as one,
+            Ros2Robot(namespace="/robot2", odom_timeout=PEER_SILENCE * LOOP_RATE) as two,
         ):
             first, second = await asyncio.gather(
                 random_walk(one, moves=2, seed=1), random_walk(two, moves=2, seed=2)

@@ -7,8 +7,10 @@ tick and drives it from ``cmd_vel``, through a ROS 2 profile
 through too); any ROS 2 tool sees it, and a robot in another process (or
 on another machine) can drive it. Topic names are relative, so
 ``--namespace /robot1`` puts them under ``/robot1``; several nodes run side
-by side under different namespaces. Ctrl-C (SIGINT) or SIGTERM stops it
-cleanly (exit code 0). The ``standard`` profile's topics:
+by side under different namespaces. ``--robots N`` puts N robots in one
+world, each with its node under ``<namespace>/robotK`` (`_sim_robots`).
+Ctrl-C (SIGINT) or SIGTERM stops it cleanly (exit code 0). The ``standard``
+profile's topics:
 
 ============================  ============================  =========================
 topic                         type                          QoS
@@ -21,6 +23,8 @@ topic                         type                          QoS
 ``cliff_<position>`` (4)      std_msgs/msg/Bool             default
 ``docked``                    std_msgs/msg/Bool             default
 ``battery_state``             sensor_msgs/msg/BatteryState  default
+``tf``                        tf2_msgs/msg/TFMessage        reliable, 100
+``tf_static``                 tf2_msgs/msg/TFMessage        reliable, transient local
 ``/clock`` (``--rate`` ≠ 1)   rosgraph_msgs/msg/Clock       default
 ``/diagnostics``              diagnostic_msgs/msg/...Array  default, 1 Hz
 ============================  ============================  =========================
@@ -35,28 +39,56 @@ topic                         type                          QoS
   nothing is in range, as REP 117 asks; frame ``ir_<position>``).
 - Bumper and cliff sensors are ``std_msgs/Bool``: True while the bumper is
   pressed, True while a cliff sensor sees no floor. ``docked`` is True on the dock.
+- ``tf``: ``odom -> base_link`` each control tick, the odometry's pose and
+  stamp; ``tf_static``: ``base_link -> <sensor>`` once (latched) for each
+  frame on the robot's body (``ir_<position>``, ``cliff_<position>``,
+  ``bumper_left``/``_right``, ``imu``, ``charge_contacts``). Relative names:
+  ``/tf`` at the root namespace, ``<namespace>/tf`` under one (as a namespaced
+  Create 3 has them). Needs ``tf2_msgs`` (``pyrobots-aio ros2 interfaces build``).
+- ``--ros-args ...`` (last on the line): remapping, ``-p use_sim_time:=true``
+  (stamps and ``/clock`` then simulated, from 0), ``--log-level``. The options
+  are served as read-only parameters; the log goes to ``/rosout`` too. A
+  command that is not finite stops the wheels; a burst of them is logged once
+  at its start and once, with the count, at its end.
 - Stamps: the system clock in real time; the simulation's clock (which
   ``/clock`` carries, from 0) when ``--rate`` is not 1.
+
+``--profile create3`` speaks the iRobot Create 3's interface instead
+(`pyrobots_aio.ros2.CREATE3`: ``hazard_detection``, ``ir_intensity``,
+``dock_status``, ``odom``, ``cmd_vel``, ``battery_state``) and serves its
+action servers ``undock``, ``dock``, ``drive_distance``, ``rotate_angle`` and
+``navigate_to_position`` over the simulated robot's own motion actions
+(``pyrobots_aio.ros2.serve_create3``), so a Create 3 program runs against it.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
+import logging
 import math
 import signal
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from pyrobots_aio.loops import run_scaled
-from pyrobots_aio.ros2 import PROFILES, STANDARD, Odometry
+from pyrobots_aio.ros2 import CREATE3, PROFILES, STANDARD, Odometry, serve_create3
+
+from ._bursts import Refusals
+from ._citizen import RosoutHandler, declare_options, uses_sim_time
+from ._sim_robots import add_robots_argument, sim_robots, topics_line
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import AsyncIterator, Mapping
 
-    from pyrobots_aio.ros2 import Profile, Ros2Node, Ros2Publisher, Topic
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from pyrobots_aio.ros2 import Profile, Ros2Node, Ros2Publisher, TfBroadcaster, Topic
     from pyrobots_aio.sim import SimRobot
 
 V = TypeVar("V")
+_log = logging.getLogger("pyrobots_aio.cli")
 
 
 def positive(text: str) -> float:
@@ -77,7 +109,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "sim-node",
         help="run the simulated robot as a ROS 2 node",
         description="Run the simulated robot as a ROS 2 node: cmd_vel in; odom, IR ranges, "
-        "bumper, cliff and dock state out (see the README's ROS 2 section for the topics). "
+        "bumper, cliff and dock state out (docs/guides/ros2.md lists the topics). "
         "Needs the ros2 and sim extras. Ctrl-C stops it.",
     )
     node.add_argument("--name", default="sim_node", help="the node's name (default: sim_node)")
@@ -114,6 +146,15 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="the ROS 2 topics, types and conversions, as Ros2Robot(profile=...) takes them "
         "(default: standard)",
     )
+    node.add_argument(
+        "--ros-args",
+        nargs=argparse.REMAINDER,
+        default=[],
+        metavar="ARG",
+        help="ROS arguments, as every ROS 2 node takes them, to the end of the line: "
+        "-r from:=to (remapping), -p use_sim_time:=true, --log-level debug ...",
+    )
+    add_robots_argument(node)
     node.set_defaults(command=run_sim_node)
 
 
@@ -125,7 +166,10 @@ class SimNode:
         ros2: Its node.
         profile: The topics, types and conversions (those `Ros2Robot` reads).
         sim_clock: Stamp with the simulation's clock and publish ``/clock``.
+        clock_origin: The robot's time that is 0 on ``/clock``.
         cmd_timeout: Seconds a command holds before the wheels stop.
+        publish_clock: Whether this node publishes ``/clock`` (with ``sim_clock``):
+            in a world of several robots, only the first's does.
     """
 
     def __init__(
@@ -135,7 +179,9 @@ class SimNode:
         *,
         profile: Profile,
         sim_clock: bool,
+        clock_origin: float = 0.0,
         cmd_timeout: float,
+        publish_clock: bool = True,
     ):
         from builtin_interfaces.msg import Time
         from rosgraph_msgs.msg import Clock
@@ -145,15 +191,19 @@ class SimNode:
         self._cmd_timeout = cmd_timeout
         self._stop_timer: asyncio.TimerHandle | None = None
         odometry, command = profile.odometry, profile.command
+        self._refused = Refusals(ros2.resolve(command.name))
         self._odom = self._publisher(odometry)
         self._sensors = [self._publisher(t) for t in profile.sensors(robot.sensors)]
         self._status = [self._publisher(t) for t in profile.status]
-        self._clock = ros2.publisher("/clock", Clock) if sim_clock else None
-        self._sim_clock = sim_clock
+        self._clock = ros2.publisher("/clock", Clock) if sim_clock and publish_clock else None
+        self._sim_clock, self._clock_origin = sim_clock, clock_origin
         self._command = command.message_class()
         self._cmd = ros2.subscribe(
             command.name, self._command, callback=self._on_command, qos=command.qos
         )
+        self._tf = _tf_broadcaster(ros2)
+        if self._tf is not None:
+            self._tf.send_static(_sensor_frames(robot), self._stamp())
         self._state = robot.state.subscribe(self._publish, keys=robot.world.state_keys)
         self.topics = sorted(p.topic for _, _, p in (self._odom, *self._sensors))
 
@@ -164,11 +214,17 @@ class SimNode:
     def close(self) -> None:
         """Stop publishing and listening (the robot's shutdown closes the ROS side)."""
         self._state.close()
+        self._refused.close()
         if self._stop_timer is not None:
             self._stop_timer.cancel()
 
     def _on_command(self, message: Any) -> None:
-        self.robot.drive(*self.profile.command.decode(message))
+        v, w = self.profile.command.decode(message)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            self.robot.stop()
+            self._refused.refuse(f"refused a command that is not finite ({v!r}, {w!r}): stopped")
+            return
+        self.robot.drive(v, w)
         if self._stop_timer is not None:
             self._stop_timer.cancel()
         self._stop_timer = asyncio.get_running_loop().call_later(self._cmd_timeout, self.robot.stop)
@@ -176,7 +232,7 @@ class SimNode:
     def _stamp(self) -> Any:
         if not self._sim_clock:
             return self.ros2.node.get_clock().now().to_msg()
-        now = self.robot.time()
+        now = self.robot.time() - self._clock_origin
         whole = math.floor(now)
         return self._time(sec=whole, nanosec=min(int((now - whole) * 1e9), 999_999_999))
 
@@ -187,50 +243,126 @@ class SimNode:
         odometry, odometry_type, odom = self._odom
         reading = Odometry(self.robot.world.odom_pose(), state["v"], state["w"])
         odom.publish(odometry.encode(odometry_type, reading, stamp))
+        if self._tf is not None:
+            self._tf.send_odometry(reading.pose, stamp)
         for topic, cls, publisher in (*self._sensors, *self._status):
             publisher.publish(topic.encode(cls, state, stamp))
 
 
+def _tf_broadcaster(ros2: Ros2Node) -> TfBroadcaster | None:
+    """The tf broadcaster, or None (said once) when tf2_msgs is not built."""
+    from pyrobots_aio.ros2 import TfBroadcaster, tf_available
+
+    if tf_available():
+        return TfBroadcaster(ros2)
+    _log.warning(
+        "sim-node publishes no tf: tf2_msgs cannot be imported "
+        "(build it with: pyrobots-aio ros2 interfaces build tf2_msgs)"
+    )
+    return None
+
+
+def _sensor_frames(robot: SimRobot) -> list[tuple[str, str, NDArray[np.float64]]]:
+    """``base_link -> frame`` for each frame on the robot's body (its sensors), as it stands."""
+    world = {"odom", "base_link", "dock"}
+    return [
+        ("base_link", frame, robot.poses.inframe(frame, "base_link").matrix())
+        for frame in robot.world.frame_names
+        if frame not in world
+    ]
+
+
 async def _serve(options: argparse.Namespace, out: TextIO) -> None:
     from pyrobots_aio.ros2 import attach_ros2, profile_named
-    from pyrobots_aio.sim import SimRobot
 
     profile = profile_named(options.profile)
-    robot = SimRobot(seed=options.seed, realtime=True, control_rate=options.control_rate)
-    sim_clock = options.rate != 1.0
-    ros2 = attach_ros2(
-        robot,
-        options.name,
-        namespace=options.namespace,
-        use_sim_time=sim_clock,
-        health_keys=("v", "w", "bumper", "docked"),
-    )
+    faster = options.rate != 1.0
+    robots = [
+        (
+            robot,
+            attach_ros2(
+                robot,
+                options.name,
+                namespace=namespace,
+                use_sim_time=True if faster else None,  # at real time, as --ros-args say
+                ros_args=options.ros_args,
+                standalone=True,
+                health_keys=("v", "w", "bumper", "docked"),
+            ),
+        )
+        for robot, namespace in sim_robots(options)
+    ]
+    first = robots[0][1]
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     signals = (signal.SIGINT, signal.SIGTERM)
     for number in signals:
         loop.add_signal_handler(number, stop.set)
     try:
-        async with robot:
-            node = SimNode(
-                robot,
-                ros2,
-                profile=profile,
-                sim_clock=sim_clock,
-                cmd_timeout=options.cmd_timeout,
+        async with contextlib.AsyncExitStack() as running:
+            for robot, _ in robots:
+                await running.enter_async_context(robot)
+            await running.enter_async_context(_rosout(first))  # the process's log, once
+            # A faster loop's clock starts at 0; the real-time one's is the machine's.
+            origin = 0.0 if faster else robots[0][0].time()
+            nodes = [
+                _start_node(robot, ros2, options, profile, origin, publish_clock=ros2 is first)
+                for robot, ros2 in robots
+            ]
+            # As --ros-args may have remapped them:
+            name = ", ".join(ros2.node.get_fully_qualified_name() for _, ros2 in robots)
+            topics = topics_line(
+                len(nodes[0].topics), [ros2.node.get_namespace() for _, ros2 in robots]
             )
             print(
-                f"sim-node {ros2.full_name} ready (domain {ros2.domain_id}, x{options.rate:g} "
-                f"real time): {len(node.topics)} topics under {ros2.namespace}",
+                f"sim-node {name} ready (domain {first.domain_id}, x{options.rate:g} "
+                f"real time): {topics}",
                 file=out,
                 flush=True,
             )
             await stop.wait()
-            node.close()
+            for node in nodes:
+                node.close()
     finally:
         for number in signals:
             loop.remove_signal_handler(number)
-    print(f"sim-node {ros2.full_name} stopped", file=out, flush=True)
+    print(f"sim-node {name} stopped", file=out, flush=True)
+
+
+def _start_node(
+    robot: SimRobot,
+    ros2: Ros2Node,
+    options: argparse.Namespace,
+    profile: Profile,
+    clock_origin: float,
+    *,
+    publish_clock: bool,
+) -> SimNode:
+    """One running robot's ROS 2 face: its parameters, topics, and a profile's servers."""
+    declare_options(ros2.node, options)
+    node = SimNode(
+        robot,
+        ros2,
+        profile=profile,
+        sim_clock=options.rate != 1.0 or uses_sim_time(ros2.node),
+        clock_origin=clock_origin,
+        cmd_timeout=options.cmd_timeout,
+        publish_clock=publish_clock,
+    )
+    if profile is CREATE3:
+        serve_create3(robot, ros2)
+    return node
+
+
+@contextlib.asynccontextmanager
+async def _rosout(ros2: Ros2Node) -> AsyncIterator[None]:
+    """The process's log records on ``/rosout`` too, while the node runs."""
+    handler = RosoutHandler(ros2.node.get_logger())
+    logging.getLogger().addHandler(handler)
+    try:
+        yield
+    finally:
+        logging.getLogger().removeHandler(handler)
 
 
 def run_sim_node(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:

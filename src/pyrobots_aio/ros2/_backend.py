@@ -18,11 +18,22 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._exceptions import MotionError, Ros2Error
+from .._exceptions import MotionError, Ros2Error, Ros2UnavailableError
 from ..motion import SENSORS, Controllers, Sensor
 from ._node import _positive
 from ._profiles import STANDARD, Odometry, Profile, profile_named
 from ._rclpy import check_topic
+from ._resets import OdometryResets, compose
+from ._tf import (
+    BUILD_TF,
+    TF,
+    TF_STATIC,
+    TfBuffer,
+    place_through_tf,
+    planar_matrix,
+    tf_message_class,
+    tf_qos,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Collection, Iterable, Mapping
@@ -60,14 +71,6 @@ def _pose2d(name: str, value: object) -> Pose2D:
     raise ValueError(msg)
 
 
-def _compose(a: Pose2D, b: Pose2D) -> Pose2D:
-    """Pose ``b`` (given in the frame that is at ``a``) expressed where ``a`` is given."""
-    ax, ay, ayaw = a
-    bx, by, byaw = b
-    c, s = math.cos(ayaw), math.sin(ayaw)
-    return ax + c * bx - s * by, ay + s * bx + c * by, math.remainder(ayaw + byaw, math.tau)
-
-
 def _sensors(sensors: Iterable[Sensor]) -> tuple[Sensor, ...]:
     table = tuple(sensors)
     strays: list[object] = [s for s in table if not isinstance(s, Sensor)]
@@ -77,8 +80,25 @@ def _sensors(sensors: Iterable[Sensor]) -> tuple[Sensor, ...]:
     return table
 
 
+def _tf_type(tf: bool | None) -> type | None:
+    """The tf message class if tf is on; None if off (or, for None, if tf2_msgs is missing)."""
+    if tf is False:
+        return None
+    try:
+        return tf_message_class()
+    except Ros2UnavailableError:
+        if tf:
+            raise
+        _log.debug("no tf: tf2_msgs cannot be imported (%s builds it)", BUILD_TF)
+        return None
+
+
 class _Frames:
-    """``odom``, ``base_link`` and ``dock`` of a `Ros2Backend`, placed in ``map``."""
+    """``odom``, ``base_link`` and ``dock`` of a `Ros2Backend`, placed in ``map``; tf's besides.
+
+    A frame tf broadcasts (a sensor's, under ``base_link``) is placed through
+    the backend's `TfBuffer`, its chain completed by these three.
+    """
 
     FRAMES = ("odom", "base_link", "dock")
 
@@ -92,17 +112,14 @@ class _Frames:
         elif frame == "base_link":
             x, y, yaw = backend.map_pose()
         elif frame == "dock":
-            x, y, yaw = _compose(backend.odom_in_map, backend.dock_in_odom)
+            x, y, yaw = compose(backend.odom_in_map, backend.dock_in_odom)
         else:
-            from .. import UnknownFrameError
-
-            msg = f"unknown frame {frame!r}; known frames: {sorted(self.FRAMES)}"
-            raise UnknownFrameError(msg)
-        c, s = math.cos(yaw), math.sin(yaw)
-        return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0, 0, 0, 1.0]])
+            return place_through_tf(backend.tf, frame, self.get_transform, self.frames())
+        return planar_matrix(x, y, yaw)
 
     def frames(self) -> Collection[str]:
-        return self.FRAMES
+        tf = self._backend.tf
+        return self.FRAMES if tf is None else (*self.FRAMES, *sorted(tf.frames()))
 
 
 class Ros2Backend:
@@ -124,6 +141,8 @@ class Ros2Backend:
         connect_timeout: Seconds starting waits for every topic's first message.
         odom_in_map: Where the ``odom`` frame lies in ``map``, ``(x, y, yaw)``.
         dock: Where the dock's frame lies in ``odom``.
+        tf: Keep a `TfBuffer` fed by ``tf`` and ``tf_static`` (`tf`): True,
+            False, or None (default) for "if ``tf2_msgs`` can be imported".
 
     Raises:
         Ros2UnavailableError: A message type cannot be imported.
@@ -142,11 +161,13 @@ class Ros2Backend:
         connect_timeout: float = 30.0,
         odom_in_map: Pose2D = (0.0, 0.0, 0.0),
         dock: Pose2D = DOCK_IN_ODOM,
+        tf: bool | None = None,
     ) -> None:
         self.node = node
         self.profile = profile_named(profile)
         self._sensors = _sensors(sensors)
         self._inputs = self.profile.sensors(self._sensors)
+        self._tf_type = _tf_type(tf)
         self.topics = self._topic_names(topics)
         self.odom_timeout = _positive("odom_timeout", odom_timeout)
         self.connect_timeout = _positive("connect_timeout", connect_timeout)
@@ -157,6 +178,10 @@ class Ros2Backend:
         self._robot: Robot | None = None
         self._running = contextlib.AsyncExitStack()
         self._odom: Pose2D = (0.0, 0.0, 0.0)
+        # Beyond twice the timeout the base went stale and was told to stop.
+        self._resets = OdometryResets(
+            self.topics[self.profile.odometry.role], horizon=2 * self.odom_timeout
+        )
         self._period = _FIRST_PERIOD
         self._reading: Odometry | None = None  # the odometry message being delivered
         self._stamp: float | None = None
@@ -170,6 +195,8 @@ class Ros2Backend:
         # tenth of a second, which would block the running loop.
         self._types = {topic.role: topic.message_class() for topic in self._topics()}
         self._subscriptions: list[Ros2Subscription] = []
+        self.tf: TfBuffer | None = None
+        """The frames heard on ``tf`` and ``tf_static`` (None: tf is off); reset at each start."""
 
     def _topics(self) -> tuple[Topic[Any], ...]:
         """Every topic it uses: the command, the odometry, the sensors'."""
@@ -177,6 +204,8 @@ class Ros2Backend:
 
     def _topic_names(self, topics: Mapping[str, str] | None) -> dict[str, str]:
         names = {topic.role: topic.name for topic in self._topics()}
+        if self._tf_type is not None:
+            names.update({TF: TF, TF_STATIC: TF_STATIC})
         unknown = sorted(set(topics or {}) - set(names))
         if unknown:
             msg = f"unknown topic roles {unknown} in topics=; known roles: {sorted(names)}"
@@ -209,7 +238,7 @@ class Ros2Backend:
 
     def map_pose(self) -> Pose2D:
         """The odometry pose placed in ``map`` through ``odom_in_map``."""
-        return _compose(self.odom_in_map, self._odom)
+        return compose(self.odom_in_map, self._odom)
 
     async def control(self, step: Callable[[], bool]) -> None:
         """Call ``step()`` after each odometry message until it returns True.
@@ -290,7 +319,8 @@ class Ros2Backend:
             ros2.subscribe(topics[t.role], types[t.role], t.decode, qos="sensor_data")
             for t in self._inputs
         ]
-        self._subscriptions = subs
+        self._subscriptions = [*subs, *self._listen_to_tf()]
+        self._resets.topic = subs[0].topic
         try:
             async with asyncio.timeout(self.connect_timeout):
                 await asyncio.gather(*(self._first(sub) for sub in subs))
@@ -303,7 +333,19 @@ class Ros2Backend:
             )
             raise Ros2Error(msg) from None
         assert self._robot is not None  # started
-        self._robot.state.update(odom_stale=False)
+        self._robot.state.update(odom_stale=False, odom_resets=0)
+
+    def _listen_to_tf(self) -> list[Ros2Subscription]:
+        """A fresh `TfBuffer` fed by ``tf`` and ``tf_static`` (not waited for: tf is optional)."""
+        if self._tf_type is None:
+            return []
+        tf = self.tf = TfBuffer(_Frames.FRAMES)
+        return [
+            self.node.subscribe(
+                self.topics[name], self._tf_type, callback=tf.receive, qos=tf_qos(static=static)
+            )
+            for name, static in ((TF, False), (TF_STATIC, True))
+        ]
 
     @property
     def _odom_topic(self) -> str:
@@ -327,12 +369,17 @@ class Ros2Backend:
         self._cmd = None
         self._last_odom = self._stamp = None
         self._stale = None
+        self._resets.clear()
 
     # -- messages (on the loop) -----------------------------------------------------
 
     def _on_odometry(self, message: Any) -> Mapping[str, object]:
         reading = self._reading = self.profile.odometry.decode(message)
-        self._odom = reading.pose
+        resets = self._resets.count
+        assert self._robot is not None  # running
+        self._odom = self._resets.pose(reading, self._odom, self._robot.time())
+        if self._resets.count != resets:
+            return {"v": reading.v, "w": reading.w, "odom_resets": self._resets.count}
         return {"v": reading.v, "w": reading.w}
 
     def _tick(self, _message: Any) -> None:

@@ -27,6 +27,7 @@ from ._rclpy import (
     rclpy_module,
     ros_name,
 )
+from ._serve import Ros2ActionServer, Ros2ServiceServer
 from ._thread import RosThread
 from ._topics import Ros2Publisher, Ros2Subscription, ToState, check_topic_type, state_mapping
 
@@ -39,6 +40,7 @@ if TYPE_CHECKING:
 _log = logging.getLogger("pyrobots_aio.ros2")
 
 M = TypeVar("M")
+S = TypeVar("S", Ros2ActionServer, Ros2ServiceServer)
 
 
 def _positive(name: str, value: float) -> float:
@@ -46,6 +48,15 @@ def _positive(name: str, value: float) -> float:
         msg = f"{name} must be a positive number of seconds, got {value!r}"
         raise ValueError(msg)
     return float(value)
+
+
+def _strings(name: str, values: Iterable[str]) -> list[str]:
+    given: object = values  # checked at run time: a lone string would be split into letters
+    items = [] if isinstance(given, str) else list(values)
+    if isinstance(given, str) or not all(isinstance(v, str) for v in items):
+        msg = f"{name} must be a list of strings, such as ['-r', 'odom:=odometry'], got {values!r}"
+        raise TypeError(msg)
+    return items
 
 
 class Ros2Node:
@@ -57,15 +68,22 @@ class Ros2Node:
     `attach_ros2`; the node lives inside ``async with robot``.
 
     ``ROS_DOMAIN_ID`` and ``ROS_AUTOMATIC_DISCOVERY_RANGE`` are read from the
-    environment, as every ROS 2 process does (set the range to ``LOCALHOST``
-    to keep discovery on this machine).
+    environment, as every ROS 2 process does; with neither the range nor
+    ``ROS_LOCALHOST_ONLY`` set, discovery stays on this machine (``LOCALHOST``,
+    where ROS 2 alone would use the subnet).
 
     Args:
         name: The node's name (``ros2 node list`` shows it).
         namespace: Its namespace (``/robot1``): relative topic names land under it.
         domain_id: The DDS domain; default: ``ROS_DOMAIN_ID`` (0 if unset).
-        use_sim_time: Stamp messages with ``/clock``'s time rather than the system's.
+        use_sim_time: Stamp messages with ``/clock``'s time rather than the system's
+            (None: as ``ros_args`` say, ``-p use_sim_time:=true``).
         remap: Topic and service remappings, ``{"cmd_vel": "/other/cmd_vel"}``.
+        ros_args: ROS arguments, as after ``--ros-args`` on a ROS 2 command line
+            (``["-r", "odom:=odometry", "-p", "use_sim_time:=true"]``).
+        standalone: The node is its process's own (a command, as ``sim-node``):
+            it logs to ``/rosout`` and serves its parameters, and ``ros_args``
+            set rcl's logging too (``--log-level``).
         diagnostics_period: Seconds between two ``/diagnostics`` messages (None: none).
         stale_after: Seconds after which a watched state key counts as stale.
         health_keys: State keys watched by ``/diagnostics`` besides those the
@@ -90,8 +108,10 @@ class Ros2Node:
         *,
         namespace: str = "/",
         domain_id: int | None = None,
-        use_sim_time: bool = False,
+        use_sim_time: bool | None = False,
         remap: Mapping[str, str] | None = None,
+        ros_args: Iterable[str] = (),
+        standalone: bool = False,
         diagnostics_period: float | None = 1.0,
         stale_after: float = 1.0,
         health_keys: Iterable[str] = (),
@@ -113,18 +133,20 @@ class Ros2Node:
         )
         self._stale_after = _positive("stale_after", stale_after)
         self._health_keys = tuple(health_keys)
-        ros_args = [arg for old, new in (remap or {}).items() for arg in ("-r", f"{old}:={new}")]
+        remaps = [arg for old, new in (remap or {}).items() for arg in ("-r", f"{old}:={new}")]
         self._thread = RosThread(
             self.name,
             self.namespace,
             domain_id=domain_id,
-            use_sim_time=bool(use_sim_time),
-            ros_args=ros_args,
+            use_sim_time=None if use_sim_time is None else bool(use_sim_time),
+            ros_args=[*remaps, *_strings("ros_args", ros_args)],
+            citizen=standalone,
         )
         self._robot: Robot | None = None
         self._subscriptions: list[Ros2Subscription] = []
         self._publishers: list[Ros2Publisher[Any]] = []
         self._clients: dict[tuple[str, type], Any] = {}
+        self._servers: list[Ros2ActionServer | Ros2ServiceServer] = []
         self._diagnostics: Diagnostics | None = None
         self._health: list[HealthMonitor] = []
 
@@ -189,6 +211,9 @@ class Ros2Node:
             sub.close()
         for pub in self._publishers:
             pub.close()
+        for server in self._servers:
+            server.close()
+        self._servers.clear()
         self._subscriptions.clear()
         self._publishers.clear()
         self._clients.clear()
@@ -371,6 +396,49 @@ class Ros2Node:
         is_action = hasattr(interface, "Goal")
         await thread.wait_until(client.server_is_ready if is_action else client.service_is_ready)
 
+    def serve_action(
+        self, name: str, action_type: type, fn: Callable[..., Any]
+    ) -> Ros2ActionServer:
+        """Serve the ROS 2 action ``name``: each goal runs ``fn`` as a pyrobots_aio action.
+
+        ``fn`` is an ``async def`` (or an `action`, with its locks) called as
+        ``fn(robot, goal, feedback)``; ``feedback(**fields)`` (or
+        ``feedback(Feedback(...))``) publishes the goal's feedback; its return
+        value (an ``action_type.Result``, or None for an empty one) is the
+        goal's result. Resources, priorities, pause and the emergency stop
+        apply to it as to any action. A goal that cannot run (the emergency
+        stop is latched, a ``wait=False`` resource is busy, the action fails at
+        its first step) is rejected, and the reason logged. A ROS 2 cancel
+        arrives in the action as ``ActionCancelled``: its cleanup runs, and the
+        goal ends CANCELED; cancelled by anything else, or failed, it ends
+        ABORTED (the reason logged).
+
+        Example:
+            >>> async def count(robot, goal, feedback):  # doctest: +SKIP
+            ...     for i in range(goal.order):
+            ...         feedback(sequence=list(range(i + 1)))
+            ...         await robot.sleep(0.1)
+            ...     return Fibonacci.Result(sequence=list(range(goal.order)))
+            >>> robot.ros2.serve_action("count", Fibonacci, count)  # doctest: +SKIP
+        """
+        return self._serve(Ros2ActionServer, name, action_type, fn)
+
+    def serve_service(self, name: str, srv_type: type, fn: Callable[..., Any]) -> Ros2ServiceServer:
+        """Serve the ROS 2 service ``name``: each request runs ``fn(robot, request)`` as an action.
+
+        Its return value (a ``srv_type.Response``) is the response, sent once
+        the action is done. Services cannot refuse: a request whose action
+        cannot run, fails or is cancelled gets an empty response, and the
+        reason is logged.
+
+        Example:
+            >>> async def reset(robot, request):  # doctest: +SKIP
+            ...     await robot.stop()
+            ...     return Trigger.Response(success=True)
+            >>> robot.ros2.serve_service("reset", Trigger, reset)  # doctest: +SKIP
+        """
+        return self._serve(Ros2ServiceServer, name, srv_type, fn)
+
     # -- internals ----------------------------------------------------------------
 
     def _client(self, name: str, interface: type) -> tuple[str, Any]:
@@ -399,6 +467,14 @@ class Ros2Node:
             )
             raise Ros2Error(msg)
         return self._thread
+
+    def _serve(self, kind: type[S], name: str, interface: type, fn: Callable[..., Any]) -> S:
+        thread = self._running_thread()
+        assert self._robot is not None  # running
+        full = str(thread.node.resolve_service_name(check_topic(name, f"{kind.kind} name")))
+        server = kind(self._robot, thread, full, interface, fn)
+        self._servers.append(server)
+        return server
 
     def _watched_keys(self) -> set[str]:
         keys = set(self._health_keys)

@@ -9,8 +9,8 @@ conversions: ``encode`` for the end that publishes, ``decode`` for the end
 that reads. `Ros2Robot` reads and commands through a profile; ``pyrobots-aio
 sim-node`` publishes the simulated robot through the same one and obeys its
 command, so the two cannot disagree. `STANDARD` is the standard messages'
-profile; another (the Create 3's) is a second `Profile` beside it in
-`PROFILES`.
+profile; the Create 3's (``CREATE3``, in ``_create3.py``) is a second
+`Profile` beside it in `PROFILES`.
 
 Message types are named (``"sensor_msgs/msg/Range"``) and imported when a
 profile is used, so this module imports without ROS 2.
@@ -247,7 +247,9 @@ nothing is in range, best effort; a flag: std_msgs/Bool), and ``battery_state``
 (sensor_msgs/BatteryState).
 """
 
-PROFILES: Mapping[str, Profile] = {STANDARD.name: STANDARD}
+from ._create3 import CREATE3  # noqa: E402 - made of this module's parts, defined above
+
+PROFILES: Mapping[str, Profile] = {STANDARD.name: STANDARD, CREATE3.name: CREATE3}
 """Every known profile, by name."""
 
 

@@ -11,19 +11,23 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..motion import SENSORS, DriveBase, Sensor
+from .._exceptions import Ros2Error
+from ..motion import SENSORS, Sensor
 from ._backend import DOCK_IN_ODOM, Ros2Backend
+from ._docking import ProfileDocking
 from ._node import Ros2Node, _positive
 from ._profiles import STANDARD, Profile
+from ._tf import BUILD_TF
 
 if TYPE_CHECKING:
     from collections.abc import Iterable, Mapping
 
     from ..motion import Pose2D
+    from ._tf import TfBuffer
     from ._topics import Ros2Publisher
 
 
-class Ros2Robot(DriveBase):
+class Ros2Robot(ProfileDocking):
     """A differential-drive robot over ROS 2: ``cmd_vel`` out, odometry and sensors in.
 
     Its backend is a `Ros2Backend`: inside ``async with``, it has a ROS 2 node
@@ -61,14 +65,28 @@ class Ros2Robot(DriveBase):
       the topic and the age, and any further non-zero command is refused
       with that error, until odometry comes back (``odom_stale`` False).
       `odom_age` tells the age at any time.
+    - **Resets**: odometry that jumps (a stamp going back, or farther between
+      two messages than a base moves: a driver that restarted) is logged as a
+      reset and counted in ``robot.state.odom_resets``; the pose goes on from
+      where it was, so a motion under way does not act on the jump.
     - **Frames**: ``odom`` is placed at ``odom_in_map`` in ``map`` (a fixed
       localisation; by default the map is the odometry's frame), ``base_link``
       at the odometry pose, and ``dock`` at ``dock`` in ``odom``.
+    - **tf**: every other frame comes from ``tf`` and ``tf_static`` (relative
+      names: ``/tf`` at the root, ``<namespace>/tf`` under one; roles ``tf``
+      and ``tf_static`` remap them): `tf` keeps the latest transform of each
+      edge, and ``robot.poses`` resolves the sensor frames a driver (or
+      sim-node) broadcasts, as on `SimRobot`. Entering does not wait for tf:
+      ``await robot.tf.wait_for_frames("ir_left")`` does.
     - **use_sim_time**: the node's clock follows ``/clock`` (the stamps of what
       it publishes, ``/diagnostics``, `ros_time`); ``robot.time()`` stays the
       event loop's clock — for a base running ``--rate`` times faster than real
       time, run the program on a loop at the same rate.
     - ``/diagnostics``: whether every input is fresh (`Ros2Node`).
+    - **Create 3** (``profile="create3"``): bumper and cliff keys come from
+      ``hazard_detection``, the IR ranges from ``ir_intensity``, ``docked``
+      from ``dock_status``; `dock` and `undock` are goals to the base's own
+      ``dock`` and ``undock`` action servers.
 
     Args:
         namespace: The robot's namespace (``/robot1``): its relative topics live there.
@@ -83,6 +101,8 @@ class Ros2Robot(DriveBase):
         odom_in_map: Where the ``odom`` frame lies in ``map``, ``(x, y, yaw)``.
         dock: Where the dock's frame lies in ``odom`` (default `DOCK_IN_ODOM`:
             the robot starts on its dock).
+        tf: Listen to tf: True, False, or None (default) for "if ``tf2_msgs``
+            can be imported" (``pyrobots-aio ros2 interfaces build tf2_msgs``).
         use_sim_time: The node's clock follows ``/clock``.
         domain_id: The DDS domain; default: ``ROS_DOMAIN_ID``.
         diagnostics_period: Seconds between two ``/diagnostics`` messages (None: none).
@@ -112,6 +132,7 @@ class Ros2Robot(DriveBase):
         connect_timeout: float = 30.0,
         odom_in_map: Pose2D = (0.0, 0.0, 0.0),
         dock: Pose2D = DOCK_IN_ODOM,
+        tf: bool | None = None,
         use_sim_time: bool = False,
         domain_id: int | None = None,
         diagnostics_period: float | None = 1.0,
@@ -134,6 +155,7 @@ class Ros2Robot(DriveBase):
             connect_timeout=connect_timeout,
             odom_in_map=odom_in_map,
             dock=dock,
+            tf=tf,
         )
         super().__init__(backend=ros, **options)
         self.ros = ros
@@ -142,6 +164,23 @@ class Ros2Robot(DriveBase):
     def ros2(self) -> Ros2Node:
         """The robot's ROS 2 node (its backend's): topics, services, goals, diagnostics."""
         return self.ros.node
+
+    @property
+    def tf(self) -> TfBuffer:
+        """The frames heard on ``tf`` and ``tf_static`` (its backend's `TfBuffer`).
+
+        Raises:
+            Ros2Error: The robot is not running, or listens to no tf (``tf=False``,
+                or ``tf2_msgs`` missing).
+        """
+        tf = self.ros.tf
+        if tf is None or not self.is_running:
+            msg = (
+                f"{self!r} has no tf buffer: it exists inside 'async with' when tf2_msgs "
+                f"imports (build it with: {BUILD_TF}) and tf is not False"
+            )
+            raise Ros2Error(msg)
+        return tf
 
     @property
     def cmd_vel(self) -> Ros2Publisher[Any]:

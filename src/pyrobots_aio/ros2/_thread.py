@@ -20,7 +20,9 @@ rclpy's signal handlers.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
+import os
 import threading
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +31,7 @@ from ._rclpy import rclpy_module
 from ._receiver import Receiver
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Iterator
 
 _log = logging.getLogger("pyrobots_aio.ros2")
 
@@ -53,6 +55,50 @@ make rclpy build a timer at every wake-up, one per message received.
 """
 JOIN_BOUND = 5.0
 """Seconds the loop waits for the ROS thread to end once its exit was cancelled."""
+
+
+DISCOVERY_RANGE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
+QUIET_RCL_LOGGING = ("--disable-stdout-logs", "--disable-external-lib-logs")
+"""rcl's own console and log-file output, off: Python's logging reports, and /rosout carries."""
+_environment = threading.Lock()
+
+
+@contextlib.contextmanager
+def localhost_discovery_by_default() -> Iterator[None]:
+    """Discovery on this machine only, unless the environment says otherwise (DESIGN §12).
+
+    ROS 2 discovers across the subnet when ``ROS_AUTOMATIC_DISCOVERY_RANGE``
+    is unset: its multicast reaches the machine's network interface. rcl
+    reads the range when a context starts, and rclpy passes it nothing else,
+    so the variable is set to ``LOCALHOST`` for that moment only, when
+    neither it nor the older ``ROS_LOCALHOST_ONLY`` is set.
+    """
+    with _environment:
+        if DISCOVERY_RANGE in os.environ or "ROS_LOCALHOST_ONLY" in os.environ:
+            yield
+            return
+        os.environ[DISCOVERY_RANGE] = "LOCALHOST"
+        try:
+            yield
+        finally:
+            del os.environ[DISCOVERY_RANGE]
+
+
+@contextlib.contextmanager
+def _rejected_arguments(ros_args: list[str]) -> Iterator[None]:
+    """Turn rclpy's refusal of ROS arguments into a `Ros2Error` quoting them and rcl's reason."""
+    errors = rclpy_module("rclpy.impl.implementation_singleton").rclpy_implementation
+    try:
+        yield
+    except errors.UnknownROSArgsError as err:
+        msg = f"unknown ROS arguments {err} in --ros-args {' '.join(ros_args)}"
+        raise Ros2Error(msg) from err
+    except errors.RCLError as err:
+        reason = str(err).split(", at ")[0]
+        if not ros_args or "pars" not in reason:
+            raise
+        msg = f"ROS 2 rejects --ros-args {' '.join(ros_args)}: {reason}"
+        raise Ros2Error(msg) from err
 
 
 def _settle(
@@ -89,8 +135,13 @@ class RosThread:
         name: The node's name (already validated).
         namespace: Its absolute namespace (already validated).
         domain_id: The DDS domain; None reads ``ROS_DOMAIN_ID`` (0 if unset).
-        use_sim_time: Whether the node's clock follows ``/clock``.
+        use_sim_time: Whether the node's clock follows ``/clock`` (None: as its
+            ROS arguments say, ``-p use_sim_time:=true``; else not).
         ros_args: Extra ROS arguments for the node (``["-r", "from:=to"]`` ...).
+        citizen: A node of its own process (``sim-node``): it logs to
+            ``/rosout`` and serves its parameters, its ROS arguments are the
+            process's too (``--log-level`` ...), and rcl logs neither to the
+            console nor to files (Python's logging does).
     """
 
     def __init__(
@@ -99,13 +150,15 @@ class RosThread:
         namespace: str,
         *,
         domain_id: int | None,
-        use_sim_time: bool,
+        use_sim_time: bool | None,
         ros_args: list[str],
+        citizen: bool = False,
     ) -> None:
         self.name, self.namespace = name, namespace
         self.domain_id = domain_id
         self.use_sim_time = use_sim_time
         self.ros_args = ros_args
+        self.citizen = citizen
         self.node: Any = None
         self.receiver: Any = None  # the Receiver of the node's subscriptions, made with it
         self._context: Any = None
@@ -215,18 +268,30 @@ class RosThread:
         executors = rclpy_module("rclpy.executors")
         parameter = rclpy_module("rclpy.parameter")
         context = self._context = rclpy_module("rclpy.context").Context()
-        # No process-wide logging set-up (rcl would write log files under ~/.ros).
-        context.init(args=[], domain_id=self.domain_id, initialize_logging=False)
-        self.node = rclpy_node.Node(
-            self.name,
-            namespace=self.namespace,
-            context=context,
-            cli_args=["--ros-args", *self.ros_args] if self.ros_args else None,
-            use_global_arguments=False,
-            enable_rosout=False,
-            start_parameter_services=False,
-            parameter_overrides=[parameter.Parameter("use_sim_time", value=self.use_sim_time)],
+        ros_args = ["--ros-args", *self.ros_args] if self.ros_args else None
+        # A library node sets no process-wide logging up (rcl would write log files under
+        # ~/.ros); a citizen's rosout needs it, without rcl's console and file output.
+        overrides = (
+            []
+            if self.use_sim_time is None
+            else [parameter.Parameter("use_sim_time", value=self.use_sim_time)]
         )
+        with localhost_discovery_by_default(), _rejected_arguments(self.ros_args):
+            context.init(
+                args=[*(ros_args or ["--ros-args"]), *QUIET_RCL_LOGGING] if self.citizen else [],
+                domain_id=self.domain_id,
+                initialize_logging=self.citizen,
+            )
+            self.node = rclpy_node.Node(
+                self.name,
+                namespace=self.namespace,
+                context=context,
+                cli_args=ros_args,
+                use_global_arguments=False,
+                enable_rosout=self.citizen,
+                start_parameter_services=self.citizen,
+                parameter_overrides=overrides,
+            )
         self.receiver = Receiver(self.name, context, SPIN_BOUND)
         executor = executors.SingleThreadedExecutor(context=context)
         executor.add_node(self.node)

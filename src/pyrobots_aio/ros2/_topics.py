@@ -20,7 +20,7 @@ from collections import deque
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
-from .._exceptions import Ros2Error, TopicTypeError
+from .._exceptions import QosMismatchError, Ros2Error, TopicTypeError
 from ._rclpy import rclpy_module, ros_name
 
 if TYPE_CHECKING:
@@ -131,17 +131,102 @@ class Matches:
                 future.set_exception(error)
 
 
-class _Endpoint:
-    """What a subscription and a publisher share: names, matches, closing."""
+def describe_qos(qos: Any) -> str:
+    """The policies that decide whether two ends match: ``reliable, volatile, keep last 10``."""
 
-    def __init__(self, thread: RosThread, topic: str, msg_type: type) -> None:
-        self.topic, self.msg_type = topic, msg_type
+    def named(policy: Any) -> str:
+        return str(policy.name).lower().replace("_", " ")
+
+    policies = [named(qos.reliability), named(qos.durability)]
+    if named(qos.history) == "keep last":  # (the graph does not tell a peer's history)
+        policies.append(f"keep last {qos.depth}")
+    return ", ".join(policies)
+
+
+def _node_of(endpoint: Any) -> str:
+    """The node of a graph endpoint, ``/namespace/name``; its names come after its QoS."""
+    if endpoint.node_name.startswith("_NODE_NAME_UNKNOWN"):
+        return "a node not named in the graph yet"
+    return f"{endpoint.node_namespace.rstrip('/')}/{endpoint.node_name}"
+
+
+_FIXES = {
+    "RELIABILITY": "a best-effort publisher needs a best-effort subscription (qos='sensor_data')",
+    "DURABILITY": "a transient-local subscription needs a transient-local publisher",
+}
+
+
+class _Endpoint:
+    """What a subscription and a publisher share: names, matches, closing, QoS mismatches.
+
+    Attributes:
+        error: The `QosMismatchError` of the last peer whose QoS cannot match, or None.
+    """
+
+    _role, _peer = "publisher", "subscription"
+
+    def __init__(self, thread: RosThread, topic: str, msg_type: type, qos: Any) -> None:
+        self.topic, self.msg_type, self.qos = topic, msg_type, qos
         self.matches = Matches()
+        self.error: QosMismatchError | None = None
         self._thread = thread
         self._closed = False
 
-    def _on_matched(self, info: Any) -> None:  # on the ROS thread
+    def _events(self, kind: str) -> Any:
+        callbacks = getattr(rclpy_module("rclpy.event_handler"), kind)
+        return callbacks(matched=self._on_matched, incompatible_qos=self._on_incompatible)
+
+    def _on_matched(self, info: Any) -> None:  # on the ROS thread or the receiver
         self._thread.to_loop(self.matches.update, info.current_count)
+
+    def _on_incompatible(self, info: Any) -> None:  # on the ROS thread or the receiver
+        policy = str(info.last_policy_kind.name).removeprefix("RMW_QOS_POLICY_")
+        error = QosMismatchError(self._mismatch(policy))
+        self._thread.to_loop(self._mismatched, error)
+
+    def _mismatch(self, policy: str) -> str:
+        """Both profiles named: ours, and each peer's the graph shows that cannot match it."""
+        qos = rclpy_module("rclpy.qos")
+        node = self._thread.node
+        peers = (
+            node.get_subscriptions_info_by_topic(self.topic)
+            if self._role == "publisher"
+            else node.get_publishers_info_by_topic(self.topic)
+        )
+        ours = self.qos
+
+        def clashes(peer: Any) -> bool:
+            pair = (
+                (ours, peer.qos_profile) if self._role == "publisher" else (peer.qos_profile, ours)
+            )
+            return bool(qos.qos_check_compatible(*pair)[0] == qos.QoSCompatibility.ERROR)
+
+        theirs = [
+            f"{_node_of(peer)} ({describe_qos(peer.qos_profile)})"
+            for peer in peers
+            if clashes(peer)
+        ] or ["a node the graph does not list yet"]
+        fix = _FIXES.get(policy, f"make the {policy.lower()} policies compatible")
+        return (
+            f"QoS mismatch on {self.topic}: this {self._role} ({describe_qos(ours)}) and the "
+            f"{self._peer} of {', '.join(theirs)} are incompatible in {policy}, so no message "
+            f"passes between them; {fix}"
+        )
+
+    def _mismatched(self, error: QosMismatchError) -> None:  # on the loop
+        if self._closed or (self.error is not None and str(self.error) == str(error)):
+            return
+        self.error = error
+        _log.error("%s", error)
+        self._fail_waiters(error)
+
+    def _fail_waiters(self, error: Exception) -> None:
+        self.matches.fail(error)
+
+    async def _matched(self, count: int) -> int:
+        if self.error is not None:
+            raise self.error
+        return await self.matches.wait(count)
 
     def _close(self, destroy: str, entity: Any, what: str) -> Ros2Error | None:
         """Destroy ``entity`` (``node.<destroy>(entity)``); the error waiters get, or None."""
@@ -151,13 +236,15 @@ class _Endpoint:
         node = self._thread.node
         if node is not None:
             getattr(node, destroy)(entity)
-        error = Ros2Error(f"the {what} {self.topic!r} is closed")
-        self.matches.fail(error)
-        return error
+        return Ros2Error(f"the {what} {self.topic!r} is closed")
 
 
 class Ros2Subscription(_Endpoint):
     """A topic feeding ``robot.state`` (made by `Ros2Node.subscribe`).
+
+    A publisher whose QoS cannot match it (a best-effort publisher, a reliable
+    subscription) is an error, logged once and kept as `error`: the waits of
+    this subscription raise it (`QosMismatchError`, both profiles named).
 
     Attributes:
         topic: The topic's full name (namespace and remapping applied).
@@ -165,7 +252,10 @@ class Ros2Subscription(_Endpoint):
         received: Messages delivered to the state (or the callback) so far.
         dropped: Messages dropped because the event loop fell a whole queue behind.
         keys: The state keys this subscription has written.
+        error: The `QosMismatchError` of a publisher that cannot match, or None.
     """
+
+    _role, _peer = "subscription", "publisher"
 
     def __init__(
         self,
@@ -178,7 +268,7 @@ class Ros2Subscription(_Endpoint):
         callback: Callable[[Any], object] | None,
         qos: Any,
     ) -> None:
-        super().__init__(thread, topic, msg_type)
+        super().__init__(thread, topic, msg_type, qos)
         self.received = self.dropped = 0
         self.keys: set[str] = set()
         self._robot = robot
@@ -188,16 +278,13 @@ class Ros2Subscription(_Endpoint):
         self._lock = threading.Lock()
         self._scheduled = False
         self._next: list[asyncio.Future[Any]] = []
-        events = rclpy_module("rclpy.event_handler").SubscriptionEventCallbacks(
-            matched=self._on_matched
-        )
         receiver = thread.receiver
         self._sub = thread.node.create_subscription(
             msg_type,
             topic,
             self._on_message,
             qos,
-            event_callbacks=events,
+            event_callbacks=self._events("SubscriptionEventCallbacks"),
             callback_group=receiver.group,
         )
         receiver.add(self._sub, self._on_messages, self._depth)
@@ -214,13 +301,23 @@ class Ros2Subscription(_Endpoint):
             return len(self._inbox)
 
     async def wait_for_publishers(self, count: int = 1) -> int:
-        """Return once at least ``count`` publishers are matched (wrap it in a timeout)."""
-        return await self.matches.wait(count)
+        """Return once at least ``count`` publishers are matched (wrap it in a timeout).
+
+        Raises:
+            QosMismatchError: One of the topic's publishers cannot match this QoS.
+        """
+        return await self._matched(count)
 
     async def wait_for_message(self) -> Any:
-        """Return the next message delivered (once it is in the state)."""
+        """Return the next message delivered (once it is in the state).
+
+        Raises:
+            QosMismatchError: A publisher of the topic cannot match this subscription's QoS.
+        """
         if self._closed:
             raise Ros2Error(f"the subscription to {self.topic!r} is closed")
+        if self.error is not None:
+            raise self.error
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self._next.append(future)
         try:
@@ -235,8 +332,11 @@ class Ros2Subscription(_Endpoint):
         if receiver is not None and not self._closed:
             receiver.remove(self._sub)
         error = self._close("destroy_subscription", self._sub, "subscription to")
-        if error is None:
-            return
+        if error is not None:
+            self._fail_waiters(error)
+
+    def _fail_waiters(self, error: Exception) -> None:
+        super()._fail_waiters(error)
         for future in self._next:
             if not future.done():
                 future.set_exception(error)
@@ -295,19 +395,22 @@ class Ros2Subscription(_Endpoint):
 class Ros2Publisher(_Endpoint, Generic[M]):
     """A publisher on a topic (made by `Ros2Node.publisher`); ``publish`` never blocks.
 
+    A subscription whose QoS cannot match it (a transient-local one, this
+    publisher volatile) is an error, logged once and kept as `error`.
+
     Attributes:
         topic: The topic's full name (namespace and remapping applied).
         msg_type: The message class.
+        error: The `QosMismatchError` of a subscription that cannot match, or None.
     """
 
     msg_type: type[M]
 
     def __init__(self, thread: RosThread, topic: str, msg_type: type[M], qos: Any) -> None:
-        super().__init__(thread, topic, msg_type)
-        events = rclpy_module("rclpy.event_handler").PublisherEventCallbacks(
-            matched=self._on_matched
+        super().__init__(thread, topic, msg_type, qos)
+        self._pub = thread.node.create_publisher(
+            msg_type, topic, qos, event_callbacks=self._events("PublisherEventCallbacks")
         )
-        self._pub = thread.node.create_publisher(msg_type, topic, qos, event_callbacks=events)
         self._publish = self._pub.publish
 
     def publish(self, message: M) -> None:
@@ -337,12 +440,18 @@ class Ros2Publisher(_Endpoint, Generic[M]):
         return self.matches.count
 
     async def wait_for_subscribers(self, count: int = 1) -> int:
-        """Return once at least ``count`` subscriptions are matched (wrap it in a timeout)."""
-        return await self.matches.wait(count)
+        """Return once at least ``count`` subscriptions are matched (wrap it in a timeout).
+
+        Raises:
+            QosMismatchError: One of the topic's subscriptions cannot match this QoS.
+        """
+        return await self._matched(count)
 
     def close(self) -> None:
         """Stop publishing; `publish` raises from now on."""
-        self._close("destroy_publisher", self._pub, "publisher on")
+        error = self._close("destroy_publisher", self._pub, "publisher on")
+        if error is not None:
+            self._fail_waiters(error)
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else f"{self.subscribers} subscribers"

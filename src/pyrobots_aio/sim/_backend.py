@@ -4,6 +4,12 @@ The ticking itself (a loop callback per tick, lockstep ticks back to back)
 is `pyrobots_aio.motion.TickingBackend`'s; here, the simulator's clock: a
 tick is a whole number of physics steps, and the world's clock reads the
 loop's from the start of each run (the physics pauses between runs).
+
+Robots sharing a world (``SimWorld(robots=N)``) each have a backend, and
+their ticks fall at the same times: a tick steps the world up to its own
+step count, so the first robot's tick at a time steps the physics and the
+others' at that time only read it. The first to start sets the clock; the
+others join it.
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ class SimBackend(TickingBackend[SimWorld]):
         super().__init__(world, period=steps * world.physics_dt, frames=WorldFrames(world))
         self.realtime = realtime
         self.steps_per_tick = steps
+        self._next_step = 0  # the world's step count at this robot's next tick
 
     def check_loop(self, loop: asyncio.AbstractEventLoop) -> VirtualTimeLoop | None:
         """The loop, in lockstep (it must be virtual); None in real time.
@@ -71,15 +78,28 @@ class SimBackend(TickingBackend[SimWorld]):
         return LockstepError("the simulated robot is not running; use 'async with robot:' first")
 
     def start_clock(self, now: float) -> float:
-        """The world's clock reads the loop's ``now``; the first tick is one tick's steps on."""
-        self.world.set_time(now)
-        return self.world.time_after(self.steps_per_tick)
+        """The world's clock reads the loop's ``now`` (unless it runs already, for another robot).
+
+        The first tick is one tick's steps on.
+        """
+        world = self.world
+        world.enter_run(now)
+        self._next_step = world.steps + self.steps_per_tick
+        return world.time_after(self.steps_per_tick)
 
     def advance(self) -> float:
-        """Step the physics one tick; the next is due one tick's steps on."""
-        world, steps = self.world, self.steps_per_tick
-        world.step(steps)
-        return world.time_after(steps)
+        """Step the physics to this tick (unless another robot's did); the next is a tick on."""
+        world = self.world
+        behind = self._next_step - world.steps
+        if behind > 0:
+            world.step(behind)
+        self._next_step += self.steps_per_tick
+        return world.time_after(self._next_step - world.steps)
+
+    async def stop(self) -> None:
+        """Stop ticking (`TickingBackend.stop`); the world's clock no longer counts this robot."""
+        await super().stop()
+        self.world.leave_run()
 
     def __repr__(self) -> str:
         mode = "realtime" if self.realtime else "lockstep"

@@ -91,16 +91,20 @@ _MORE_KEYS = (  # read after the sensors (`ModelLayout.sensors`)
 
 
 class _Finder:
-    """Looks parts up by name; a missing part is a `ModelLoadError` naming it."""
+    """Looks parts up by name; a missing part is a `ModelLoadError` naming it.
 
-    def __init__(self, mujoco: ModuleType, model: Any, path: str) -> None:
-        self.mujoco, self.model, self.path = mujoco, model, path
+    In a world of several robots, each robot's parts (the dock's too) carry its
+    ``prefix`` (``"robot2/"``; the first robot's none): names are looked up with it.
+    """
+
+    def __init__(self, mujoco: ModuleType, model: Any, path: str, prefix: str) -> None:
+        self.mujoco, self.model, self.path, self.prefix = mujoco, model, path, prefix
 
     def id(self, kind: str, name: str) -> int:
         obj = getattr(self.mujoco.mjtObj, f"mjOBJ_{kind.upper()}")
-        index = int(self.mujoco.mj_name2id(self.model, obj, name))
+        index = int(self.mujoco.mj_name2id(self.model, obj, self.prefix + name))
         if index < 0:
-            self.fail(f"it has no {kind} named {name!r}")
+            self.fail(f"it has no {kind} named {self.prefix + name!r}")
         return index
 
     def sensor(self, name: str) -> int:
@@ -114,15 +118,20 @@ class _Finder:
         return value
 
     def rangefinders(self, prefix: str) -> list[tuple[str, int, float, float]]:
-        """``(name, sensordata index, cutoff, bearing)`` of each rangefinder named ``prefix...``."""
+        """``(name, sensordata index, cutoff, bearing)`` of each rangefinder named ``prefix...``.
+
+        The names are the robot's own, without its prefix in the world.
+        """
         model, found = self.model, []
         rangefinder = int(self.mujoco.mjtSensor.mjSENS_RANGEFINDER)
+        own = self.prefix + prefix
         for index in range(model.nsensor):
-            name = str(model.sensor(index).name)
-            if not name.startswith(prefix):
+            full = str(model.sensor(index).name)
+            if not full.startswith(own):
                 continue
             if int(model.sensor_type[index]) != rangefinder:
-                self.fail(f"its sensor {name!r} must be a rangefinder")
+                self.fail(f"its sensor {full!r} must be a rangefinder")
+            name = full.removeprefix(self.prefix)
             adr, cutoff = int(model.sensor_adr[index]), float(model.sensor_cutoff[index])
             found.append((name, adr, cutoff, _bearing(model, int(model.sensor_objid[index]))))
         return found
@@ -167,13 +176,13 @@ class ModelLayout:
     state_keys: tuple[str, ...]
 
     @classmethod
-    def from_model(cls, mujoco: ModuleType, model: Any, path: str) -> ModelLayout:
-        """Read the layout of ``model`` (loaded from ``path``).
+    def from_model(cls, mujoco: ModuleType, model: Any, path: str, prefix: str = "") -> ModelLayout:
+        """Read the layout of ``model`` (loaded from ``path``) of the robot named ``prefix...``.
 
         Raises:
             ModelLoadError: A part is missing or of the wrong kind.
         """
-        find = _Finder(mujoco, model, path)
+        find = _Finder(mujoco, model, path, prefix)
         base = find.id("body", "base_link")
         root = find.id("joint", "base_link")
         if int(model.jnt_type[root]) != int(mujoco.mjtJoint.mjJNT_FREE):
@@ -212,7 +221,7 @@ class ModelLayout:
             ir_noise=find.numeric("ir_noise"),
             battery_runtime=find.numeric("battery_runtime", positive=True),
             battery_charge_time=find.numeric("battery_charge_time", positive=True),
-            frame_sites=_frame_sites(model, base, find.id("site", "dock")),
+            frame_sites=_frame_sites(model, base, find.id("site", "dock"), prefix),
             sensors=sensors,
             state_keys=(*(s.key for s in sensors), *_MORE_KEYS),
         )
@@ -237,7 +246,7 @@ def _half_sizes(model: Any, site: int) -> tuple[float, float, float]:
     return x, y, z
 
 
-def _frame_sites(model: Any, base: int, dock: int) -> dict[str, int]:
-    """The robot's sites (every site in the base's subtree), then the dock's."""
+def _frame_sites(model: Any, base: int, dock: int, prefix: str) -> dict[str, int]:
+    """The robot's sites (every site in the base's subtree), then the dock's; named unprefixed."""
     robot = [i for i in range(model.nsite) if int(model.body_rootid[model.site_bodyid[i]]) == base]
-    return {str(model.site(i).name): i for i in [*robot, dock]}
+    return {str(model.site(i).name).removeprefix(prefix): i for i in [*robot, dock]}

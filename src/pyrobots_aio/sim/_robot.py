@@ -18,6 +18,8 @@ if TYPE_CHECKING:
 
 __all__ = ["SimRobot"]
 
+_DEFAULT_DT = 0.002
+
 
 class SimRobot(DriveBase):
     """The MuJoCo simulation of a Create-3-sized robot in its arena; it starts docked.
@@ -42,6 +44,9 @@ class SimRobot(DriveBase):
             CPU allows (start it with `pyrobots_aio.sim.run` or the
             ``virtual_time`` pytest marker); True follows the wall clock.
         model: Another MJCF scene containing the robot (default: the shipped arena).
+        world: A robot of a world built beforehand, to share it with other
+            simulated robots: ``SimWorld(robots=2).robots[1]`` (then the world
+            gives the model, the seed and ``physics_dt``; pass none of them).
         control_rate: Control ticks per second; sensors reach ``robot.state`` each tick.
         physics_dt: The physics step, in seconds.
         **options: `DriveBase` and `Robot` options (``stall_timeout``, ``max_actions``,
@@ -56,6 +61,19 @@ class SimRobot(DriveBase):
         ...         return robot.state.docked
         >>> run(main)
         False
+
+        Two robots in one world (each on its own dock, 0.5 m apart), one program:
+
+        >>> import asyncio
+        >>> from pyrobots_aio.sim import SimWorld
+        >>> async def pair() -> tuple[bool, bool, float]:
+        ...     first, second = (SimRobot(world=w) for w in SimWorld(robots=2).robots)
+        ...     async with first, second:
+        ...         await asyncio.gather(first.undock(), second.undock())
+        ...         apart = second.map_pose()[1] - first.map_pose()[1]
+        ...         return first.state.docked, second.state.docked, round(apart, 2)
+        >>> run(pair)
+        (False, False, 0.5)
     """
 
     def __init__(
@@ -64,14 +82,22 @@ class SimRobot(DriveBase):
         seed: int = 0,
         realtime: bool = False,
         model: str | Path | None = None,
+        world: SimWorld | None = None,
         control_rate: float = 50.0,
-        physics_dt: float = 0.002,
+        physics_dt: float = _DEFAULT_DT,
         **options: Any,
     ) -> None:
-        world = SimWorld(model, seed=seed, physics_dt=physics_dt)
+        if world is None:
+            world = SimWorld(model, seed=seed, physics_dt=physics_dt)
+        elif model is not None or seed != 0 or physics_dt != _DEFAULT_DT:
+            msg = (
+                "SimRobot(world=...) takes its model, seed and physics_dt from the world; "
+                "pass them to SimWorld(...) instead"
+            )
+            raise ValueError(msg)
         sim = SimBackend(world, control_rate=control_rate, realtime=realtime)
         super().__init__(backend=sim, **options)
         self.sim = sim
         self.world = world
-        self.seed = seed
+        self.seed = world.seed
         self.realtime = realtime

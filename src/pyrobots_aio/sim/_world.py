@@ -21,6 +21,14 @@ batched (``step(10)`` or ten ``step(1)``) does not change the physics, nor
 does how `step` saves work (a test pins it to plain ``mj_step`` bit for bit); the
 odometry, like a robot's firmware, integrates the encoders once per call (as a
 circular arc), so it differs by micrometres.
+
+Several robots: ``SimWorld(robots=N)`` holds N copies of the robot in one
+physics (``_scene``: each on its own dock, 0.5 m apart), so they see and
+bump into one another. The world is then N `SimWorld` objects, one per
+robot (`SimWorld.robots`; the one constructed is the first): each has the
+robot's own API (commands, sensors, odometry, frames, IR noise from its own
+generator) and all share the physics, its step count and its clock, so
+stepping any of them steps them all.
 """
 
 from __future__ import annotations
@@ -28,16 +36,17 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from .. import ModelLoadError, SimulationUnavailableError, UnknownFrameError
+from .. import SimulationUnavailableError, UnknownFrameError
 from .._core._numbers import finite
 from ..motion._math import limit_speeds
 from ._models import ModelLayout
 from ._models import model_path as _default_model_path
 from ._odometry import Odometry
+from ._scene import MAX_ROBOTS, load_model, robot_prefix
 
 if TYPE_CHECKING:
     from types import ModuleType
@@ -99,16 +108,6 @@ def _mujoco_warning(message: str) -> None:
     _log.warning("MuJoCo: %s", message)
 
 
-def _load(mujoco: ModuleType, path: Path) -> Any:
-    if not path.is_file():
-        raise ModelLoadError(f"cannot load the MuJoCo model {str(path)!r}: no such file")
-    try:
-        return mujoco.MjModel.from_xml_path(str(path))
-    except (ValueError, mujoco.FatalError) as err:
-        problem = str(err).strip()
-        raise ModelLoadError(f"cannot load the MuJoCo model {str(path)!r}: {problem}") from err
-
-
 def _yaw(qw: float, qx: float, qy: float, qz: float) -> float:
     return math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
 
@@ -129,6 +128,31 @@ def _matrix(pos: NDArray[np.float64], rot: NDArray[np.float64]) -> NDArray[np.fl
     return out
 
 
+class _Shared:
+    """What the robots of one world share: the physics, its step count and clock, the robots."""
+
+    __slots__ = (
+        "clock_start",
+        "data",
+        "dt",
+        "model",
+        "mujoco",
+        "path",
+        "robots",
+        "running",
+        "seed",
+        "steps",
+    )
+
+    def __init__(self, mujoco: ModuleType, model: Any, path: Path, seed: int, dt: float) -> None:
+        self.mujoco, self.model, self.data = mujoco, model, mujoco.MjData(model)
+        self.path, self.seed, self.dt = path, seed, dt
+        self.steps = 0
+        self.clock_start = (0.0, 0)  # `time` reads this time at this step
+        self.robots: tuple[SimWorld, ...] = ()
+        self.running: set[int] = set()  # the robots whose simulated robot runs (`enter_run`)
+
+
 class SimWorld:
     """The MuJoCo simulation of the differential-drive robot in its arena.
 
@@ -138,12 +162,15 @@ class SimWorld:
             simulator finds its parts by name) and a dock (``arena.xml``).
         seed: Seeds the IR noise; the same seed and calls give the same run.
         physics_dt: The physics step in seconds (overrides the model's).
+        robots: How many robots share the world (1 to 7): copies of the
+            model's robot, each on its own copy of the dock, 0.5 m apart along
+            y (0, +0.5, -0.5 ...). This object is the first; `robots` has all.
 
     Raises:
         SimulationUnavailableError: MuJoCo is not installed.
         ModelLoadError: The model does not load, or lacks a part the simulator
             needs; the message names the file and the problem.
-        ValueError: ``physics_dt`` is not a positive number.
+        ValueError: ``physics_dt`` is not a positive number, or ``robots`` out of range.
 
     Examples:
         >>> world = SimWorld(seed=1)
@@ -152,53 +179,91 @@ class SimWorld:
         500
         >>> round(world.odom_pose()[0], 1)
         0.2
+        >>> first, second = SimWorld(robots=2).robots
+        >>> second.set_command(0.2, 0.0)
+        >>> first.advance(1.0)  # one physics: the second robot moves too
+        500
+        >>> round(second.odom_pose()[0], 1), round(second.base_pose()[1], 1)
+        (0.2, 0.5)
     """
 
+    MAX_ROBOTS: ClassVar[int] = MAX_ROBOTS
+    """The most robots a world holds (``robots=``): seven docks fit along the arena's wall."""
+
     def __init__(
-        self, model_path: str | Path | None = None, *, seed: int = 0, physics_dt: float = 0.002
+        self,
+        model_path: str | Path | None = None,
+        *,
+        seed: int = 0,
+        physics_dt: float = 0.002,
+        robots: int = 1,
     ) -> None:
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, not {seed!r}")
         physics_dt = finite(
             "physics_dt", physics_dt, positive=True, must="a positive number of seconds"
         )
+        if isinstance(robots, bool) or not isinstance(robots, int) or not 0 < robots <= MAX_ROBOTS:
+            raise ValueError(
+                f"robots must be a whole number from 1 to {MAX_ROBOTS} (one dock each), "
+                f"not {robots!r}"
+            )
         mujoco = _import_mujoco()
         path = Path(model_path) if model_path is not None else _default_model_path()
-        model = _load(mujoco, path)
+        model = load_model(mujoco, path, robots)
         model.opt.timestep = physics_dt
-        self._opt = model.opt  # a view of the model's options, fetched once (each fetch costs)
-        self._sensors_off = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
-        # mj_step2 integrates as mj_step does, except RK4 (it falls back to Euler).
-        self._split_step = model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4
-        self._layout = ModelLayout.from_model(mujoco, model, str(path))
-        self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
-        self._mujoco, self._model, self._data = mujoco, model, mujoco.MjData(model)
-        self._sensordata, self._ctrl = self._data.sensordata, self._data.ctrl  # views, fetched once
-        body = self._layout.base_body  # the base's position and the first row of its rotation
-        self._base_xpos, self._base_xmat = self._data.xpos[body], self._data.xmat[body, :4]
-        self._path, self._seed, self._dt = path, seed, physics_dt
-        self._readings: list[float] = []  # sensordata of the current state, as floats
-        self._is_docked = False  # of the current state
+        shared = _Shared(mujoco, model, path, seed, physics_dt)
+        shared.robots = (self, *(SimWorld.__new__(SimWorld) for _ in range(robots - 1)))
+        for index, world in enumerate(shared.robots):
+            world._join(shared, index)
         self._reset_to_home()
-        self._rng = np.random.default_rng(seed)
-        self._noise: list[float] = []  # IR noise drawn ahead, consumed in order
-        self._noise_used = 0
-        self._steps = 0
-        self._clock_start = (0.0, 0)  # `time` reads this time at this step
-        self._command = (0.0, 0.0)
-        self._battery = 1.0
-        left, right = self._encoders()
-        self._odometry = Odometry(self._layout.wheel_radius, self._layout.track, left, right)
         _log.debug(
-            "loaded %s: %d IR and %d cliff sensors, seed %d",
+            "loaded %s: %d robot(s), %d IR and %d cliff sensors each, seed %d",
             path,
+            robots,
             len(self._layout.ir),
             len(self._layout.cliffs),
             seed,
         )
 
+    def _join(self, shared: _Shared, index: int) -> None:
+        """Set this robot's side of the world up: robot ``index`` of ``shared``'s physics."""
+        mujoco, model, data, path = shared.mujoco, shared.model, shared.data, shared.path
+        self._opt = model.opt  # a view of the model's options, fetched once (each fetch costs)
+        self._sensors_off = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+        # mj_step2 integrates as mj_step does, except RK4 (it falls back to Euler).
+        self._split_step = model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4
+        self._layout = ModelLayout.from_model(mujoco, model, str(path), robot_prefix(index))
+        self._site_indices = np.fromiter(self._layout.frame_sites.values(), dtype=np.intp)
+        self._mujoco, self._model, self._data = mujoco, model, data
+        self._sensordata, self._ctrl = data.sensordata, data.ctrl  # views, fetched once
+        body = self._layout.base_body  # the base's position and the first row of its rotation
+        self._base_xpos, self._base_xmat = data.xpos[body], data.xmat[body, :4]
+        self._dofs = np.flatnonzero(model.body_rootid[model.dof_bodyid] == body)
+        self._path, self._seed, self._dt = path, shared.seed, shared.dt
+        self._shared, self._index = shared, index
+        self._readings: list[float] = []  # sensordata of the current state, as floats
+        self._is_docked = False  # of the current state
+        # The first robot's noise is drawn as a world of one robot draws it.
+        self._rng = np.random.default_rng([shared.seed, index] if index else shared.seed)
+        self._noise: list[float] = []  # IR noise drawn ahead, consumed in order
+        self._noise_used = 0
+        self._command = (0.0, 0.0)
+        self._battery = 1.0
+
     def __repr__(self) -> str:
-        return f"<SimWorld {self._path.name} seed={self._seed} t={self.time:.3f}s>"
+        robots = len(self._shared.robots)
+        which = f" robot {self._index + 1} of {robots}" if robots > 1 else ""
+        return f"<SimWorld {self._path.name}{which} seed={self._seed} t={self.time:.3f}s>"
+
+    @property
+    def robots(self) -> tuple[SimWorld, ...]:
+        """Every robot of the world, the first first: one `SimWorld` each, sharing the physics.
+
+        ``SimWorld(robots=2).robots`` is ``(the world, its second robot)``; a
+        world of one robot is ``(itself,)``. Give one to ``SimRobot(world=...)``.
+        """
+        return self._shared.robots
 
     @property
     def model_path(self) -> Path:
@@ -218,7 +283,7 @@ class SimWorld:
     @property
     def steps(self) -> int:
         """The number of physics steps taken since construction."""
-        return self._steps
+        return self._shared.steps
 
     @property
     def time(self) -> float:
@@ -230,8 +295,8 @@ class SimWorld:
 
         Computed from whole steps, so it equals `time` exactly once they are taken.
         """
-        start, at_step = self._clock_start
-        return start + (self._steps + steps - at_step) * self._dt
+        start, at_step = self._shared.clock_start
+        return start + (self._shared.steps + steps - at_step) * self._dt
 
     def set_time(self, now: float) -> None:
         """Make `time` read ``now`` at the current step; it advances by `physics_dt` per step.
@@ -243,7 +308,26 @@ class SimWorld:
             ValueError: ``now`` is not a finite number.
         """
         now = finite("the simulation time", now)
-        self._clock_start = (now, self._steps)
+        self._shared.clock_start = (now, self._shared.steps)
+
+    def enter_run(self, now: float) -> None:
+        """Count this robot as running; the first to run sets the clock to ``now``.
+
+        A simulated robot calls it as it starts, `leave_run` as it stops: the
+        first robot of a world to start sets the clock (as `set_time`), the
+        others join the clock running (the physics is one).
+
+        Raises:
+            ValueError: ``now`` is not a finite number.
+        """
+        shared = self._shared
+        if not shared.running:
+            self.set_time(now)
+        shared.running.add(self._index)
+
+    def leave_run(self) -> None:
+        """No longer count this robot as running (see `enter_run`)."""
+        self._shared.running.discard(self._index)
 
     @property
     def command(self) -> tuple[float, float]:
@@ -323,9 +407,10 @@ class SimWorld:
         finally:
             opt.disableflags = flags
         self._forward()
-        self._steps += n
-        self._odometry.update(*self._encoders())
-        self._update_battery(n * self._dt)
+        self._shared.steps += n
+        for robot in self._shared.robots:
+            robot._odometry.update(*robot._encoders())
+            robot._update_battery(n * self._dt)
 
     def advance(self, dt: float) -> int:
         """Advance the physics by ``dt`` seconds and return the steps taken.
@@ -359,7 +444,7 @@ class SimWorld:
         data.qpos[qpos : qpos + 3] = (x, y, self._rest_z)
         heading = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
         mujoco.mju_mulQuat(data.qpos[qpos + 3 : qpos + 7], heading, self._rest_tilt)
-        data.qvel[:] = 0.0
+        data.qvel[self._dofs] = 0.0  # this robot's: the others keep moving
         self._forward()
         self._odometry.reset(*self._encoders())
 
@@ -537,6 +622,14 @@ class SimWorld:
         if key >= 0:
             mujoco.mj_resetDataKeyframe(model, data, key)
         self._forward()
+        for robot in self._shared.robots:
+            robot._settle()
+
+    def _settle(self) -> None:
+        """Note how the robot rests; start its odometry where it stands."""
+        mujoco, data = self._mujoco, self._data
+        left, right = self._encoders()
+        self._odometry = Odometry(self._layout.wheel_radius, self._layout.track, left, right)
         # How the robot rests on the floor (its height, and its tilt onto the
         # caster with the heading taken out), so that `place` puts it down settled.
         qpos = self._layout.free_qpos
@@ -556,11 +649,13 @@ class SimWorld:
         mujoco.mj_checkPos(model, data)
         mujoco.mj_checkVel(model, data)
         mujoco.mj_forward(model, data)
-        self._readings = s = self._sensordata.tolist()
-        start = self._layout.dock_contact
-        px, py, pz = s[start : start + 3]
-        hx, hy, hz = self._layout.dock_pad
-        self._is_docked = abs(px) <= hx and abs(py) <= hy and abs(pz) <= hz
+        s = self._sensordata.tolist()
+        for robot in self._shared.robots:
+            robot._readings = s
+            start = robot._layout.dock_contact
+            px, py, pz = s[start : start + 3]
+            hx, hy, hz = robot._layout.dock_pad
+            robot._is_docked = abs(px) <= hx and abs(py) <= hy and abs(pz) <= hz
 
     def _encoders(self) -> tuple[float, float]:
         left, right = self._layout.encoders

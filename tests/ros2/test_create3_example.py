@@ -1,0 +1,35 @@
+"""``examples/create3_walk.py``, a plain rclpy Create 3 program, unchanged against a sim-node."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+from pathlib import Path
+
+import pytest
+from ros2_support import DEADLINE, require_rclpy, run_script
+
+require_rclpy()
+pytest.importorskip(
+    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
+)
+pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+
+from test_sim_node import sim_node  # noqa: E402
+
+EXAMPLE = Path(__file__).parent.parent.parent / "examples" / "create3_walk.py"
+
+
+@pytest.mark.asyncio
+async def test_the_create3_program_undocks_walks_is_cancelled_by_a_bump_and_docks() -> None:
+    async with (
+        asyncio.timeout(DEADLINE * 2),
+        sim_node("--namespace", "/walker", "--profile", "create3", "--rate", "4"),
+    ):
+        code, out, err = await run_script(EXAMPLE, "--external", "--namespace", "/walker")
+    told = f"stdout:\n{out}\nstderr (end):\n{err[-3000:]}"
+    assert code == 0, told
+    summary = re.fullmatch(r"6 moves, (\d+) drives cancelled by bumps, docked\n", out)
+    assert summary is not None, told
+    assert int(summary[1]) >= 1, told  # seed 0 drives into a wall
+    assert "bump: cancelling the drive" in err
