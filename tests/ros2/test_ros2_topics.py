@@ -214,6 +214,25 @@ async def test_topics_reach_the_state_while_rclpys_executor_is_busy(
 
 
 @pytest.mark.asyncio
+async def test_subscriptions_closed_under_a_flood_leave_the_receiver_quiet(
+    plain: Callable[..., PlainNode], caplog: pytest.LogCaptureFixture
+) -> None:
+    # A subscription closed while the receiver was taking from it (or running its
+    # matched handler) made the receiver fail: destruction was requested meanwhile.
+    teleop = plain("teleop")
+    publisher, _ = teleop.publisher("/flood", Twist, 100)
+    teleop.node.create_timer(0.0005, lambda: publisher.publish(twist(0.1, 0.0)))
+    robot = Robot()
+    attach_ros2(robot, "executive")
+    async with robot, asyncio.timeout(DEADLINE):
+        for _ in range(30):
+            sub = robot.ros2.subscribe("/flood", Twist, {"v": "linear.x"}, qos=100)
+            await sub.wait_for_message()
+            sub.close()
+    assert [r.getMessage() for r in caplog.records if r.levelname == "ERROR"] == []
+
+
+@pytest.mark.asyncio
 async def test_two_robots_in_one_process_each_have_their_own_node(
     plain: Callable[..., PlainNode],
 ) -> None:

@@ -157,11 +157,13 @@ class Receiver:
                 wait_set.wait(self._bound_ns)
                 ready = wait_set.get_ready_entities("subscription")
                 for entry in live:
-                    if entry.subscription.handle.pointer in ready:
-                        _take(entry)
+                    with contextlib.suppress(invalid):  # closed meanwhile: the next round drops it
+                        if entry.subscription.handle.pointer in ready:
+                            _take(entry)
                 for handler in handlers:
-                    if handler.is_ready(wait_set):
-                        _run_to_end(handler.execute(handler.take_data()))
+                    with contextlib.suppress(invalid):  # its subscription closed meanwhile
+                        if handler.is_ready(wait_set):
+                            _run_to_end(handler.execute(handler.take_data()))
 
 
 def _take(entry: _Entry) -> None:
