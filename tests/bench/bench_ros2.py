@@ -1,13 +1,17 @@
 """Benchmarks of the ROS 2 bridge (DESIGN.md §10), each beside plain rclpy in the same run.
 
 Real DDS (Fast DDS) between real processes on this machine, discovery kept
-on localhost in a domain of its own. Latencies are one-way: the sender puts
-``time.perf_counter_ns()`` (CLOCK_MONOTONIC, shared by every process here)
-in an ``std_msgs/Int64`` and the receiver subtracts it from its own clock.
+on localhost in a domain of its own. Latencies are one-way and per message:
+the sender puts ``time.perf_counter_ns()`` (CLOCK_MONOTONIC, shared by every
+process here) in each message and the receiver's time is compared with that
+message's own stamp.
 
-- ``topic_to_callback_*``: a message from another process, until a monitor
-  callback runs on ``robot.state`` (the bridge), beside a plain rclpy
-  subscription callback in the same process, on the same messages;
+- ``topic_to_callback_*``: a message from a sender process until a monitor
+  callback runs on ``robot.state`` in a bridge process, beside a plain rclpy
+  subscription callback in a process of its own (a message lost on the way
+  is not counted: ``*_samples_*`` says how many came). The sender sends on both
+  sides' topics at 250 Hz each, half a period apart, alternating which
+  goes first; each side has its process (and its GIL) to itself;
 - ``publish_to_wire_*``: ``node.publisher(...).publish`` (what
   ``drive()`` will use) until the message reaches another process, beside a
   plain rclpy publisher in the same process, alternately;
@@ -16,8 +20,13 @@ in an ``std_msgs/Int64`` and the receiver subtracts it from its own clock.
   another process, beside a plain rclpy ``Twist`` built and published in the
   same process, alternately (each command's speed tells it apart; the other
   process feeds the robot the odometry it needs to run);
-- ``flood_*``: a burst from another process as fast as it can send, counted
-  into the state by the bridge and by a plain rclpy callback beside it.
+- ``flood_*``, ``*_zero_loss_*``: the highest rate each side absorbs with
+  zero loss (every message of a ``FLOOD_SECONDS`` burst counted into the
+  state, or by a plain rclpy callback), sent at a paced rate by a process
+  of its own; the rate doubles until a burst loses one, then is bisected;
+  the two sides' bursts alternate. Both subscriptions keep ``FLOOD_DEPTH``
+  messages, so a burst longer than that queue shows the receiver's own
+  sustained rate.
 
 Without rclpy the module prints why and returns nothing.
 """
@@ -41,9 +50,14 @@ from .bench_events import _p99, _stats
 if TYPE_CHECKING:
     from collections.abc import Callable
 
+KINDS = ("bridge", "plain")
 LATENCY_N = 1_500
-PERIOD = 0.004  # seconds between two latency messages: 250 Hz, a fast sensor
-FLOOD_N = 20_000
+PERIOD = 0.004  # seconds between two latency messages on one topic: 250 Hz, a fast sensor
+FLOOD_SECONDS = 2.0  # each burst: long enough that the queues cannot hide a slow receiver
+FLOOD_DEPTH = 1_000  # history depth of both sides' subscriptions (and of the sender)
+FLOOD_START = 2_000.0  # messages/s of the first burst
+FLOOD_ROUNDS = 8  # bursts per side at most
+FLOOD_RESOLUTION = 1.1  # the search stops once the lossy rate is within 10 % of the lossless
 
 
 class _Plain:
@@ -69,63 +83,234 @@ class _Plain:
         self.context.try_shutdown()
 
 
-# -- the helper process ---------------------------------------------------------------
+# -- the helper processes ------------------------------------------------------------
 
 
-def _helper(mode: str) -> None:
-    """The other process: ``send`` latency messages or a ``flood``, or ``receive`` them."""
+def _wait_matched(publisher: Any, wanted: int = 1) -> None:
+    """Block until ``publisher`` matches ``wanted`` subscriptions, matched from their side too."""
+    while publisher.get_subscription_count() < wanted:
+        time.sleep(0.01)
+    time.sleep(0.5)
+
+
+def _send_latency() -> None:
+    """Latency messages on both latency topics, half a period apart, each stamped when sent."""
     from std_msgs.msg import Int64
 
-    plain = _Plain(f"bench_{mode}")
-    node = plain.node
-    if mode == "twists":
-        from geometry_msgs.msg import Twist
-
-        # The first arrival of each command (the bridge re-sends one with each odometry).
-        first: dict[str, dict[float, int]] = {"bridge": {}, "plain": {}}
-
-        def arrived(kind: str) -> Callable[[Any], None]:
-            def on_twist(message: Any) -> None:
-                first[kind].setdefault(message.linear.x, time.perf_counter_ns())
-
-            return on_twist
-
-        for kind in first:
-            node.create_subscription(Twist, f"/bench/{kind}/cmd_vel", arrived(kind), 1000)
-        _feed_odometry(node)
-        print("ready", flush=True)
-        sys.stdin.readline()
-        print(
-            json.dumps({k: {v: t for v, t in f.items() if v} for k, f in first.items()}), flush=True
-        )
-    elif mode == "receive":
-        got: dict[str, list[int]] = {"bridge": [], "plain": []}
-        for kind in got:
-            node.create_subscription(
-                Int64,
-                f"/bench/wire_{kind}",
-                lambda m, k=kind: got[k].append(time.perf_counter_ns() - m.data),
-                1000,
-            )
-        print("ready", flush=True)
-        sys.stdin.readline()
-        print(json.dumps(got), flush=True)
-    else:
-        topic = "/bench/latency" if mode == "send" else "/bench/flood"
-        publisher = node.create_publisher(Int64, topic, 1000)
-        print("ready", flush=True)
-        wanted = int(sys.stdin.readline())
-        while publisher.get_subscription_count() < wanted:
-            time.sleep(0.01)
-        time.sleep(0.5)  # both subscriptions matched from their side too
-        count = LATENCY_N if mode == "send" else FLOOD_N
-        for _ in range(count):
-            publisher.publish(Int64(data=time.perf_counter_ns()))
-            if mode == "send":
-                time.sleep(PERIOD)
-        print("done", flush=True)
-        sys.stdin.readline()
+    plain = _Plain("bench_send")
+    publishers = {
+        kind: plain.node.create_publisher(Int64, f"/bench/latency_{kind}", 100) for kind in KINDS
+    }
+    print("ready", flush=True)
+    sys.stdin.readline()
+    for publisher in publishers.values():
+        _wait_matched(publisher)
+    order = list(KINDS)
+    for _ in range(LATENCY_N):
+        order.reverse()  # neither side always first
+        for kind in order:
+            publishers[kind].publish(Int64(data=time.perf_counter_ns()))
+            time.sleep(PERIOD / 2)
+    print("done", flush=True)
     plain.close()
+
+
+def _plain_latency() -> None:
+    """A plain rclpy subscription callback: its latency from each message's own stamp."""
+    from std_msgs.msg import Int64
+
+    plain = _Plain("bench_plain_latency")
+    samples: list[int] = []
+    plain.node.create_subscription(
+        Int64,
+        "/bench/latency_plain",
+        lambda m: samples.append(time.perf_counter_ns() - m.data),
+        100,
+    )
+    print("ready", flush=True)
+    sys.stdin.readline()
+    print(json.dumps(samples), flush=True)
+    plain.close()
+
+
+def _bridge_latency() -> None:
+    """The bridge: topic -> ``robot.state`` -> a monitor callback, which notes its time.
+
+    A monitor callback is not given the value that fired it, so it notes only
+    when it ran; its n-th run answers the n-th message delivered (every
+    message fires the monitor, in order), whose stamp the subscription's own
+    callback noted as it was delivered. Both lists go back to the parent.
+    """
+    asyncio.run(_bridge_latency_main())
+
+
+async def _bridge_latency_main() -> None:
+    from std_msgs.msg import Int64
+
+    from pyrobots_aio import Robot
+    from pyrobots_aio.ros2 import attach_ros2
+
+    robot = Robot()
+    node = attach_ros2(robot, "bench_bridge_latency")
+    stamps: list[int] = []
+    ran: list[int] = []
+    async with robot:
+        node.subscribe(
+            "/bench/latency_bridge",
+            Int64,
+            {"stamp": "data"},
+            callback=lambda m: stamps.append(m.data),
+            qos=100,
+        )
+        robot.state.stamp = 0
+        monitor = robot.whenever("stamp", increase=1, max_firing_freq=0, blocking=False)
+        monitor.do(lambda: ran.append(time.perf_counter_ns()))
+        print("ready", flush=True)
+        await asyncio.to_thread(sys.stdin.readline)
+        print(json.dumps({"stamps": stamps, "ran": ran}), flush=True)
+
+
+def _send_flood() -> None:
+    """Bursts at a given rate: ``KIND RATE`` on stdin; answers the rate achieved."""
+    from std_msgs.msg import Int64
+
+    plain = _Plain("bench_flood")
+    publishers = {
+        kind: plain.node.create_publisher(Int64, f"/bench/flood_{kind}", FLOOD_DEPTH)
+        for kind in KINDS
+    }
+    print("ready", flush=True)
+    for publisher in publishers.values():
+        _wait_matched(publisher)
+    while line := sys.stdin.readline():
+        kind, rate = line.split()
+        print(json.dumps(_burst(publishers[kind], float(rate))), flush=True)
+    plain.close()
+
+
+def _burst(publisher: Any, rate: float) -> dict[str, float]:
+    """Send ``rate`` messages/s for ``FLOOD_SECONDS``, paced to the millisecond."""
+    from std_msgs.msg import Int64
+
+    count = round(rate * FLOOD_SECONDS)
+    period = 1.0 / rate
+    start = time.perf_counter()
+    for n in range(count):
+        ahead = start + n * period - time.perf_counter()
+        if ahead > 0.001:
+            time.sleep(ahead)
+        publisher.publish(Int64(data=n))
+    took = time.perf_counter() - start
+    return {"sent": count, "rate": (count - 1) / took if took else rate}
+
+
+def _plain_flood() -> None:
+    """A plain rclpy subscription counting a flood; ``N`` on stdin: how many came of N."""
+    from std_msgs.msg import Int64
+
+    plain = _Plain("bench_plain_flood")
+    got = [0]
+
+    def on_message(_message: Any) -> None:
+        got[0] += 1
+
+    plain.node.create_subscription(Int64, "/bench/flood_plain", on_message, FLOOD_DEPTH)
+    print("ready", flush=True)
+    while line := sys.stdin.readline():
+        print(_settled(got, int(line)), flush=True)
+        got[0] = 0
+    plain.close()
+
+
+def _bridge_flood() -> None:
+    """The bridge counting a flood into ``robot.state``; ``N`` on stdin: how many came of N."""
+    asyncio.run(_bridge_flood_main())
+
+
+async def _bridge_flood_main() -> None:
+    from std_msgs.msg import Int64
+
+    from pyrobots_aio import Robot
+    from pyrobots_aio.ros2 import attach_ros2
+
+    robot = Robot()
+    node = attach_ros2(robot, "bench_bridge_flood")
+    got = [0]
+
+    def on_flood(_changes: object) -> None:
+        got[0] += 1
+
+    async with robot:
+        node.subscribe("/bench/flood_bridge", Int64, lambda m: {"flood": m.data}, qos=FLOOD_DEPTH)
+        robot.state.subscribe(on_flood, keys="flood")
+        print("ready", flush=True)
+        while line := await asyncio.to_thread(sys.stdin.readline):
+            print(await asyncio.to_thread(_settled, got, int(line)), flush=True)
+            got[0] = 0
+
+
+def _settled(got: list[int], wanted: int) -> int:
+    """``got[0]`` once it reaches ``wanted`` or stops growing for half a second."""
+    last, still = -1, 0.0
+    while got[0] < wanted and still < 0.5:  # a count in another thread: looked at, not awaited
+        still = still + 0.05 if got[0] == last else 0.0
+        last = got[0]
+        time.sleep(0.05)
+    return got[0]
+
+
+def _receive_wire() -> None:
+    """What ``publish_to_wire`` sends, from both sides: each message's latency."""
+    from std_msgs.msg import Int64
+
+    plain = _Plain("bench_receive")
+    got: dict[str, list[int]] = {"bridge": [], "plain": []}
+    for kind in got:
+        plain.node.create_subscription(
+            Int64,
+            f"/bench/wire_{kind}",
+            lambda m, k=kind: got[k].append(time.perf_counter_ns() - m.data),
+            1000,
+        )
+    print("ready", flush=True)
+    sys.stdin.readline()
+    print(json.dumps(got), flush=True)
+    plain.close()
+
+
+def _receive_twists() -> None:
+    """What ``drive_to_wire`` sends: each command's first arrival; odometry for the robot."""
+    from geometry_msgs.msg import Twist
+
+    plain = _Plain("bench_twists")
+    # The first arrival of each command (the bridge re-sends one with each odometry).
+    first: dict[str, dict[float, int]] = {"bridge": {}, "plain": {}}
+
+    def arrived(kind: str) -> Callable[[Any], None]:
+        def on_twist(message: Any) -> None:
+            first[kind].setdefault(message.linear.x, time.perf_counter_ns())
+
+        return on_twist
+
+    for kind in first:
+        plain.node.create_subscription(Twist, f"/bench/{kind}/cmd_vel", arrived(kind), 1000)
+    _feed_odometry(plain.node)
+    print("ready", flush=True)
+    sys.stdin.readline()
+    print(json.dumps({k: {v: t for v, t in f.items() if v} for k, f in first.items()}), flush=True)
+    plain.close()
+
+
+HELPERS: dict[str, Callable[[], None]] = {
+    "send_latency": _send_latency,
+    "plain_latency": _plain_latency,
+    "bridge_latency": _bridge_latency,
+    "send_flood": _send_flood,
+    "plain_flood": _plain_flood,
+    "bridge_flood": _bridge_flood,
+    "receive_wire": _receive_wire,
+    "receive_twists": _receive_twists,
+}
 
 
 def _feed_odometry(node: object) -> None:
@@ -170,47 +355,33 @@ def _tell(process: subprocess.Popen[str], line: str) -> str:
 # -- topic -> state -> monitor callback --------------------------------------------------
 
 
-async def _topic_to_callback() -> dict[str, float]:
-    from std_msgs.msg import Int64
-
-    from pyrobots_aio import Robot
-    from pyrobots_aio.ros2 import attach_ros2
-
-    bridge: list[float] = []
-    plain_samples: list[float] = []
-    plain = _Plain("bench_plain_sub")
-    plain.node.create_subscription(
-        Int64,
-        "/bench/latency",
-        lambda m: plain_samples.append(time.perf_counter_ns() - m.data),
-        100,
-    )
-    sender = _start("send")
-    robot = Robot()
-    node = attach_ros2(robot, "bench_bridge")
+def _topic_to_callback() -> dict[str, float]:
+    receivers = {kind: _start(f"{kind}_latency") for kind in KINDS}
+    sender = _start("send_latency")
     try:
-        async with robot:
-            sub = node.subscribe("/bench/latency", Int64, {"stamp": "data"}, qos=100)
-            robot.state.stamp = 0
-
-            def on_stamp() -> None:
-                bridge.append(time.perf_counter_ns() - robot.state.stamp)
-
-            robot.whenever("stamp", increase=1, blocking=False).do(on_stamp)
-            assert (await asyncio.to_thread(_tell, sender, "2")).strip() == "done"
-            async with asyncio.timeout(60):
-                while sub.received < LATENCY_N - sub.dropped:
-                    await sub.wait_for_message()
-            await asyncio.sleep(0.1)
+        assert _tell(sender, "go").strip() == "done"
+        time.sleep(0.5)  # the last messages on their way
+        got = {kind: json.loads(_tell(receiver, "")) for kind, receiver in receivers.items()}
     finally:
-        _tell(sender, "")
-        sender.wait()
-        plain.close()
+        for process in (sender, *receivers.values()):
+            process.wait()
+    stamps, ran = got["bridge"]["stamps"], got["bridge"]["ran"]
+    if len(ran) != len(stamps):
+        msg = (
+            f"the bridge's monitor ran {len(ran)} times for {len(stamps)} messages delivered: "
+            "its runs are paired with the messages in order, so none may be missing"
+        )
+        raise RuntimeError(msg)
+    bridge = [end - stamp for end, stamp in zip(ran, stamps, strict=True)]
+    plain = got["plain"]
     return {
         **_stats("topic_to_callback_bridge", bridge),
-        **_stats("topic_to_callback_plain_rclpy", plain_samples),
-        "topic_to_callback_samples": float(len(bridge)),
-        "ros2_topic_to_callback_p99_ratio": _p99(bridge) / _p99(plain_samples),
+        **_stats("topic_to_callback_plain_rclpy", plain),
+        "topic_to_callback_samples_bridge": float(len(bridge)),
+        "topic_to_callback_samples_plain_rclpy": float(len(plain)),
+        "topic_to_callback_sent_each": float(LATENCY_N),
+        "ros2_topic_to_callback_median_ratio": statistics.median(bridge) / statistics.median(plain),
+        "ros2_topic_to_callback_p99_ratio": _p99(bridge) / _p99(plain),
     }
 
 
@@ -223,7 +394,7 @@ async def _publish_to_wire() -> dict[str, float]:
     from pyrobots_aio import Robot
     from pyrobots_aio.ros2 import attach_ros2
 
-    receiver = _start("receive")
+    receiver = _start("receive_wire")
     plain = _Plain("bench_plain_pub")
     plain_pub = plain.node.create_publisher(Int64, "/bench/wire_plain", 1000)
     robot = Robot()
@@ -266,7 +437,7 @@ async def _drive_to_wire() -> dict[str, float]:
     from pyrobots_aio.motion import SENSORS
     from pyrobots_aio.ros2 import Ros2Robot
 
-    receiver = _start("twists")
+    receiver = _start("receive_twists")
     plain = _Plain("bench_plain_twist")
     plain_pub = plain.node.create_publisher(Twist, "/bench/plain/cmd_vel", 1000)
     flags = [s for s in SENSORS if s.key in ("bumper", "bumper_left", "bumper_right", "docked")]
@@ -314,54 +485,67 @@ async def _drive_to_wire() -> dict[str, float]:
 # -- flood ------------------------------------------------------------------------------------
 
 
-async def _flood() -> dict[str, float]:
-    from std_msgs.msg import Int64
+class _Search:
+    """The highest rate with zero loss: doubled from ``FLOOD_START`` until a loss, then bisected."""
 
-    from pyrobots_aio import Robot
-    from pyrobots_aio.ros2 import attach_ros2
+    def __init__(self) -> None:
+        self.lossless = 0.0  # the highest rate achieved without loss
+        self.lossy = float("inf")  # the lowest rate achieved with a loss
+        self.publisher_limited = False
 
-    plain_times: list[int] = []
-    plain = _Plain("bench_plain_flood")
-    plain.node.create_subscription(
-        Int64, "/bench/flood", lambda m: plain_times.append(time.perf_counter_ns()), 1000
-    )
-    bridge_times: list[int] = []
-    lag: list[int] = []
-    flooder = _start("flood")
-    robot = Robot()
-    node = attach_ros2(robot, "bench_bridge")
+    @property
+    def done(self) -> bool:
+        return self.lossy <= self.lossless * FLOOD_RESOLUTION
+
+    def next_rate(self) -> float:
+        if self.lossy == float("inf"):
+            return 2 * self.lossless if self.lossless else FLOOD_START
+        return (self.lossless * self.lossy) ** 0.5 if self.lossless else self.lossy / 2
+
+    def record(self, wanted: float, achieved: float, lost: int) -> None:
+        if lost:
+            self.lossy = min(self.lossy, achieved)
+            return
+        self.lossless = max(self.lossless, achieved)
+        if achieved < 0.9 * wanted:  # the sender's own limit: no higher rate to try
+            self.publisher_limited = True
+            self.lossy = self.lossless
+
+
+def _flood() -> dict[str, float]:
+    receivers = {kind: _start(f"{kind}_flood") for kind in KINDS}
+    sender = _start("send_flood")
+    searches = {kind: _Search() for kind in KINDS}
+    trials = dict.fromkeys(KINDS, 0.0)
+    order = list(KINDS)
     try:
-        async with robot:
-            sub = node.subscribe("/bench/flood", Int64, lambda m: {"flood": m.data}, qos=1000)
-
-            def on_flood(_changes: object) -> None:
-                bridge_times.append(time.perf_counter_ns())
-                lag.append(sub.queued)
-
-            robot.state.subscribe(on_flood, keys="flood")
-            assert (await asyncio.to_thread(_tell, flooder, "2")).strip() == "done"
-            for _ in range(200):  # what is still on its way
-                count = sub.received
-                await asyncio.sleep(0.05)
-                if sub.received == count and len(plain_times) >= len(bridge_times):
-                    break
-            dropped = sub.dropped
+        for _ in range(FLOOD_ROUNDS):
+            order.reverse()  # neither side always first
+            for kind in order:
+                search = searches[kind]
+                if search.done:
+                    continue
+                wanted = search.next_rate()
+                burst = json.loads(_tell(sender, f"{kind} {wanted}"))
+                got = int(_tell(receivers[kind], str(burst["sent"])))
+                search.record(wanted, burst["rate"], max(0, burst["sent"] - got))
+                trials[kind] += 1
     finally:
-        _tell(flooder, "")
-        flooder.wait()
-        plain.close()
-
-    def rate(times: list[int]) -> float:
-        return (len(times) - 1) / ((times[-1] - times[0]) / 1e9) if len(times) > 1 else 0.0
-
+        for process in (sender, *receivers.values()):
+            assert process.stdin is not None
+            process.stdin.close()
+            process.wait()
+    bridge, plain = searches["bridge"], searches["plain"]
     return {
-        "flood_sent": float(FLOOD_N),
-        "flood_bridge_received": float(len(bridge_times)),
-        "flood_plain_rclpy_received": float(len(plain_times)),
-        "flood_bridge_dropped_by_lag": float(dropped),
-        "flood_bridge_max_queued": float(max(lag, default=0)),
-        "ros2_bridge_msgs_per_s": rate(bridge_times),
-        "ros2_plain_rclpy_msgs_per_s": rate(plain_times),
+        "flood_seconds_per_trial": FLOOD_SECONDS,
+        "flood_trials_bridge": trials["bridge"],
+        "flood_trials_plain_rclpy": trials["plain"],
+        "flood_lossy_bridge_msgs_per_s": bridge.lossy if bridge.lossy < float("inf") else 0.0,
+        "flood_lossy_plain_rclpy_msgs_per_s": plain.lossy if plain.lossy < float("inf") else 0.0,
+        "flood_publisher_limited": float(bridge.publisher_limited or plain.publisher_limited),
+        "ros2_bridge_zero_loss_msgs_per_s": bridge.lossless,
+        "ros2_plain_rclpy_zero_loss_msgs_per_s": plain.lossless,
+        "ros2_zero_loss_rate_ratio": bridge.lossless / plain.lossless if plain.lossless else 0.0,
     }
 
 
@@ -371,11 +555,12 @@ def run() -> dict[str, float]:
         return {}
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(102, 200)))
-    results: dict[str, float] = {}
-    for bench in (_topic_to_callback, _publish_to_wire, _drive_to_wire, _flood):
+    results = _topic_to_callback()
+    for bench in (_publish_to_wire, _drive_to_wire):
         results.update(asyncio.run(bench()))
+    results.update(_flood())
     return results
 
 
 if __name__ == "__main__":
-    _helper(sys.argv[1])
+    HELPERS[sys.argv[1]]()

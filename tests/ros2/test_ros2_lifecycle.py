@@ -106,6 +106,39 @@ async def test_the_exit_ends_even_if_the_executor_s_wake_up_is_lost() -> None:
 
 
 @pytest.mark.asyncio
+async def test_the_ros_thread_builds_no_timer_at_each_wake_up(
+    plain: Callable[..., PlainNode], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A timeout given to spin_once made rclpy build an rcl timer at every wake-up of the
+    # executor (one per message): the bound on its wait is the node's own timer instead.
+    import rclpy.executors
+
+    built = Counter[str]()
+
+    class CountedTimer(rclpy.executors.Timer):
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            built["timer"] += 1
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(rclpy.executors, "Timer", CountedTimer)
+    teleop = plain("teleop")
+    robot = Robot()
+    attach_ros2(robot, "executive", diagnostics_period=None)
+    got: asyncio.Queue[Any] = asyncio.Queue()
+    loop = asyncio.get_running_loop()
+    async with robot, asyncio.timeout(DEADLINE):
+        robot.ros2.node.create_subscription(  # through rclpy's executor, on the ROS thread
+            Twist, "/teleop", lambda m: loop.call_soon_threadsafe(got.put_nowait, m), 10
+        )
+        publisher, matched = teleop.publisher("/teleop", Twist)
+        await matched.wait()
+        for _ in range(20):
+            publisher.publish(Twist())
+            await got.get()
+    assert built["timer"] == 0
+
+
+@pytest.mark.asyncio
 async def test_the_domain_comes_from_ros_domain_id_unless_given() -> None:
     first, second = Robot(), Robot()
     attach_ros2(first, "from_env")

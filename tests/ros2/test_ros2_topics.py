@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
+import threading
 import time
 from typing import TYPE_CHECKING, Any
 
@@ -177,6 +178,58 @@ async def test_a_lagging_loop_drops_the_oldest_messages_as_keep_last_does(
         oldest_kept = await sub.wait_for_message()  # the drain delivers the five in order
         assert (oldest_kept.linear.x, sub.received, robot.state.v) == (15.0, 5, 19.0)
         assert robot.state.version("v") == 5
+
+
+@pytest.mark.asyncio
+async def test_topics_reach_the_state_while_rclpys_executor_is_busy(
+    plain: Callable[..., PlainNode],
+) -> None:
+    # The bridge's subscriptions are taken by the node's receiver, not by rclpy's
+    # executor: a slow rclpy callback of the node's (a user's raw timer) does not hold them.
+    teleop = plain("teleop")
+    robot = Robot()
+    attach_ros2(robot, "executive")
+    loop = asyncio.get_running_loop()
+    busy: asyncio.Future[None] = loop.create_future()
+    release = threading.Event()
+
+    def slow() -> None:  # on the executor's thread, which it holds until released
+        loop.call_soon_threadsafe(lambda: busy.done() or busy.set_result(None))
+        release.wait(DEADLINE)
+
+    async with robot, asyncio.timeout(DEADLINE):
+        sub = robot.ros2.subscribe("/teleop", Twist, {"v": "linear.x"})
+        timer = robot.ros2.node.create_timer(0.001, slow)
+        try:
+            await busy
+            publisher, matched = teleop.publisher("/teleop", Twist)
+            await matched.wait()
+            await sub.wait_for_publishers()
+            publisher.publish(twist(0.4, 0.0))
+            await sub.wait_for_message()
+            assert (robot.state.v, sub.publishers) == (0.4, 1)
+        finally:
+            timer.cancel()
+            release.set()
+
+
+@pytest.mark.asyncio
+async def test_subscriptions_closed_under_a_flood_leave_the_receiver_quiet(
+    plain: Callable[..., PlainNode], caplog: pytest.LogCaptureFixture
+) -> None:
+    # A subscription closed while the receiver was taking from it (or running its
+    # matched handler) made the receiver fail: destruction was requested meanwhile.
+    teleop = plain("teleop")
+    publisher, _ = teleop.publisher("/flood", Twist, 100)
+    teleop.node.create_timer(0.0005, lambda: publisher.publish(twist(0.1, 0.0)))
+    robot = Robot()
+    attach_ros2(robot, "executive")
+    async with robot, asyncio.timeout(DEADLINE):
+        for _ in range(30):
+            sub = robot.ros2.subscribe("/flood", Twist, {"v": "linear.x"}, qos=100)
+            await sub.wait_for_message()
+            sub.close()
+    assert [r.getMessage() for r in caplog.records if r.levelname == "ERROR"] == []
 
 
 @pytest.mark.asyncio

@@ -2,11 +2,15 @@
 
 rclpy 9 has no asyncio executor, so the bridge runs rclpy's
 ``SingleThreadedExecutor`` on a dedicated thread and hands everything that
-arrives there (messages, service responses, goal results) to the event loop
-with ``loop.call_soon_threadsafe``: the loop never polls and never blocks on
-rclpy. The thread creates the context and node itself (a DDS participant
-takes tens of milliseconds to come up) and tears them down when the
-executor stops, so `RosThread.stop` leaves no thread, node or context behind.
+arrives there (service responses, goal results, graph events) to the event
+loop with ``loop.call_soon_threadsafe``: the loop never polls and never
+blocks on rclpy. The bridge's subscriptions are the exception: the node's
+`Receiver` takes their messages on a thread of its own, cheaper per message
+than the executor (see `_receiver`).
+
+The thread creates the context and node itself (a DDS participant takes
+tens of milliseconds to come up) and tears them down when the executor
+stops, so `RosThread.stop` leaves no thread, node or context behind.
 
 Each node has its own context (never rclpy's global default one): two robots
 in one process, or two tests in a row, share nothing, and neither installs
@@ -24,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._exceptions import Ros2Error
 from ._rclpy import rclpy_module
+from ._receiver import Receiver
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
@@ -44,7 +49,9 @@ SPIN_BOUND = 0.5
 `RosThread.stop` wakes the executor (``executor.shutdown``), but on a loaded
 machine that wake-up was once lost: the thread slept on in its wait set, and
 the robot's exit waited for it forever. Looking again this often bounds the
-exit; a node with nothing to do then only goes back to its wait.
+exit; a node with nothing to do then only goes back to its wait. The bound is
+a timer of the node's own, made once: a timeout given to ``spin_once`` would
+make rclpy build a timer at every wake-up, one per message received.
 """
 JOIN_BOUND = 5.0
 """Seconds the loop waits for the ROS thread to end once its exit was cancelled."""
@@ -105,6 +112,15 @@ def _settle(
         future.set_result(result)
 
 
+def _nothing() -> None:
+    """The SPIN_BOUND timer's callback: its firing alone ends the executor's wait."""
+
+
+def _steady_clock() -> Any:
+    clock = rclpy_module("rclpy.clock")
+    return clock.Clock(clock_type=clock.ClockType.STEADY_TIME)
+
+
 def _fail_quietly(future: asyncio.Future[Any], error: BaseException) -> None:
     """Fail ``future``; whoever awaits it gets ``error``, and nobody is told if nobody does."""
     if not future.done():
@@ -144,6 +160,7 @@ class RosThread:
         self.ros_args = ros_args
         self.citizen = citizen
         self.node: Any = None
+        self.receiver: Any = None  # the Receiver of the node's subscriptions, made with it
         self._context: Any = None
         self._executor: Any = None
         self._thread: threading.Thread | None = None
@@ -239,9 +256,10 @@ class RosThread:
     def _spin(self, executor: Any) -> None:
         """``executor.spin()``, except that a callback that raises does not stop the node."""
         # As rclpy's spin() loops, and our own stop flag besides (see SPIN_BOUND).
+        self.node.create_timer(SPIN_BOUND, _nothing, clock=_steady_clock())
         while not self._stopping and executor.context.ok() and not executor._is_shutdown:
             try:
-                executor.spin_once(timeout_sec=SPIN_BOUND)
+                executor.spin_once()
             except Exception:  # rclpy re-raises a callback's error here: log it, go on
                 _log.exception("a ROS 2 callback of node %s failed", self.name)
 
@@ -274,6 +292,7 @@ class RosThread:
                 start_parameter_services=self.citizen,
                 parameter_overrides=overrides,
             )
+        self.receiver = Receiver(self.name, context, SPIN_BOUND)
         executor = executors.SingleThreadedExecutor(context=context)
         executor.add_node(self.node)
         return executor
@@ -283,11 +302,13 @@ class RosThread:
             executor, self._executor = self._executor, None
         if executor is not None:
             executor.shutdown(timeout_sec=0)
+        if self.receiver is not None:
+            self.receiver.stop(JOIN_BOUND)
         if self.node is not None:
             self.node.destroy_node()
         if self._context is not None:
             self._context.try_shutdown()
-        self.node = self._context = self._recheck = None
+        self.node = self._context = self._recheck = self.receiver = None
 
     # -- handing work over --------------------------------------------------------
 
@@ -322,9 +343,9 @@ class RosThread:
         with self._lock:
             self._waiters.append((ready, future))
             if self._recheck is None:
-                clock = rclpy_module("rclpy.clock")
-                steady = clock.Clock(clock_type=clock.ClockType.STEADY_TIME)
-                self._recheck = self.node.create_timer(RECHECK_PERIOD, self._check, clock=steady)
+                self._recheck = self.node.create_timer(
+                    RECHECK_PERIOD, self._check, clock=_steady_clock()
+                )
             else:
                 self._recheck.reset()
         try:

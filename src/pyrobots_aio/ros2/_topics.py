@@ -1,11 +1,12 @@
 """Topics: subscriptions that write ``robot.state``, and publishers.
 
-A message reaches the loop without polling: rclpy's callback (on the ROS
-thread) puts it in the subscription's inbox and, if the inbox was empty,
-schedules one drain with ``call_soon_threadsafe``; the drain writes every
-queued message to the state, in order, each as one batch. The inbox holds at
-most the QoS history depth: if the loop falls that far behind, the oldest
-messages are dropped (and counted), as a ROS 2 ``KEEP_LAST`` queue would.
+A message reaches the loop without polling: the node's receiver (its own
+thread, see `_receiver`) takes what DDS holds for the subscription, puts the
+batch in the subscription's inbox and, if the inbox was empty, schedules one
+drain with ``call_soon_threadsafe``; the drain writes every queued message
+to the state, in order, each as one batch. The inbox holds at most the QoS
+history depth: if the loop falls that far behind, the oldest messages are
+dropped (and counted), as a ROS 2 ``KEEP_LAST`` queue would.
 """
 
 from __future__ import annotations
@@ -175,10 +176,10 @@ class _Endpoint:
         callbacks = getattr(rclpy_module("rclpy.event_handler"), kind)
         return callbacks(matched=self._on_matched, incompatible_qos=self._on_incompatible)
 
-    def _on_matched(self, info: Any) -> None:  # on the ROS thread
+    def _on_matched(self, info: Any) -> None:  # on the ROS thread or the receiver
         self._thread.to_loop(self.matches.update, info.current_count)
 
-    def _on_incompatible(self, info: Any) -> None:  # on the ROS thread
+    def _on_incompatible(self, info: Any) -> None:  # on the ROS thread or the receiver
         policy = str(info.last_policy_kind.name).removeprefix("RMW_QOS_POLICY_")
         error = QosMismatchError(self._mismatch(policy))
         self._thread.to_loop(self._mismatched, error)
@@ -272,18 +273,21 @@ class Ros2Subscription(_Endpoint):
         self.keys: set[str] = set()
         self._robot = robot
         self._mapping, self._callback = mapping, callback
-        self._inbox: deque[Any] = deque()
         self._depth = max(1, qos.depth)
+        self._inbox: deque[Any] = deque(maxlen=self._depth)
         self._lock = threading.Lock()
         self._scheduled = False
         self._next: list[asyncio.Future[Any]] = []
+        receiver = thread.receiver
         self._sub = thread.node.create_subscription(
             msg_type,
             topic,
             self._on_message,
             qos,
             event_callbacks=self._events("SubscriptionEventCallbacks"),
+            callback_group=receiver.group,
         )
+        receiver.add(self._sub, self._on_messages, self._depth)
 
     @property
     def publishers(self) -> int:
@@ -324,6 +328,9 @@ class Ros2Subscription(_Endpoint):
 
     def close(self) -> None:
         """Stop receiving; messages already queued are dropped."""
+        receiver = self._thread.receiver
+        if receiver is not None and not self._closed:
+            receiver.remove(self._sub)
         error = self._close("destroy_subscription", self._sub, "subscription to")
         if error is not None:
             self._fail_waiters(error)
@@ -334,14 +341,17 @@ class Ros2Subscription(_Endpoint):
             if not future.done():
                 future.set_exception(error)
 
-    # -- on the ROS thread ----------------------------------------------------------
+    # -- on the receiver's thread -----------------------------------------------------
 
     def _on_message(self, message: Any) -> None:
+        """Deliver one message (rclpy's callback; the receiver takes the messages instead)."""
+        self._on_messages([message])
+
+    def _on_messages(self, messages: list[Any]) -> None:
         with self._lock:
-            if len(self._inbox) >= self._depth:
-                self._inbox.popleft()
-                self.dropped += 1
-            self._inbox.append(message)
+            # the inbox keeps the newest `depth` messages: count those it is about to drop
+            self.dropped += max(0, len(self._inbox) + len(messages) - self._depth)
+            self._inbox.extend(messages)
             if self._scheduled:
                 return
             self._scheduled = True
