@@ -112,7 +112,12 @@ def _settings(examples: int, profile: str) -> settings:
         "dev": {"max_examples": examples},
         "long": {"max_examples": examples * LONG_FACTOR},
     }
+    # Hypothesis's own default, not the profile loaded where this runs: with CI set in the
+    # environment that is Hypothesis's "ci" profile (no example database, a reproduce blob
+    # appended to every error), which would change what ``dev`` keeps and what a test sees
     return settings(
+        settings.get_profile("default"),
+        print_blob=False,
         deadline=None,  # a run takes what it takes on a loaded machine; virtual time is exact
         suppress_health_check=list(HealthCheck),
         phases=(Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink),
