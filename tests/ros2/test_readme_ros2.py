@@ -46,13 +46,17 @@ def test_the_readme_has_a_ros2_snippet() -> None:
         assert "pyrobots-aio sim-node --namespace /robot1" in text
 
 
-@pytest.mark.asyncio
-async def test_the_ros2_snippet_drives_a_sim_node(tmp_path: Path) -> None:
+def _script(path: Path, code: str) -> Path:
+    """``code`` written to ``path``, as a user's script."""
+    path.write_text(code)
+    return path
+
+
+async def _run_beside(script: Path, deadline: float, *node_args: str) -> str:
+    """Run ``script`` beside a sim-node; its stdout, once both ended cleanly."""
     import signal
 
-    script = tmp_path / "drive.py"
-    script.write_text(SNIPPETS[0])
-    async with asyncio.timeout(DEADLINE), sim_node("--namespace", "/robot1") as node:
+    async with asyncio.timeout(deadline), sim_node(*node_args) as node:
         user = await asyncio.create_subprocess_exec(
             sys.executable,
             str(script),
@@ -61,50 +65,32 @@ async def test_the_ros2_snippet_drives_a_sim_node(tmp_path: Path) -> None:
         )
         out, err = await user.communicate()
         assert user.returncode == 0, err.decode()
-        assert re.fullmatch(r"drove 0\.1\d m\n", out.decode())
         assert (await stop(node, signal.SIGINT))[0] == 0
+    return out.decode()
+
+
+@pytest.mark.asyncio
+async def test_the_ros2_snippet_drives_a_sim_node(tmp_path: Path) -> None:
+    out = await _run_beside(
+        _script(tmp_path / "drive.py", SNIPPETS[0]), DEADLINE, "--namespace", "/robot1"
+    )
+    assert re.fullmatch(r"drove 0\.1\d m\n", out)
 
 
 @pytest.mark.asyncio
 @pytest.mark.parametrize("profile", ["standard", "create3"])
 async def test_the_ros2_robot_snippets_walk_a_sim_node(tmp_path: Path, profile: str) -> None:
-    import signal
-
     if profile == "create3":
         pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
-    script = tmp_path / "walk.py"
-    script.write_text((ROBOT_SNIPPETS if profile == "standard" else CREATE3_SNIPPETS)[0])
-    async with (
-        asyncio.timeout(DEADLINE * 2),
-        sim_node("--namespace", "/robot1", "--rate", "4", "--profile", profile) as node,
-    ):
-        user = await asyncio.create_subprocess_exec(
-            sys.executable,
-            str(script),
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE,
-        )
-        out, err = await user.communicate()
-        assert user.returncode == 0, err.decode()
-        assert out.decode() == "3 moves, docked: True\n"
-        assert (await stop(node, signal.SIGINT))[0] == 0
+    code = (ROBOT_SNIPPETS if profile == "standard" else CREATE3_SNIPPETS)[0]
+    node = ("--namespace", "/robot1", "--rate", "4", "--profile", profile)
+    out = await _run_beside(_script(tmp_path / "walk.py", code), DEADLINE * 2, *node)
+    assert out == "3 moves, docked: True\n"
 
 
 @pytest.mark.asyncio
 async def test_the_served_action_snippet_turns_a_sim_node(tmp_path: Path) -> None:
-    import signal
-
     pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
-    script = tmp_path / "serve.py"
-    script.write_text(SERVE_SNIPPETS[0])
-    async with asyncio.timeout(DEADLINE), sim_node("--namespace", "/robot1") as node:
-        user = await asyncio.create_subprocess_exec(
-            sys.executable,
-            str(script),
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE,
-        )
-        out, err = await user.communicate()
-        assert user.returncode == 0, err.decode()
-        assert re.fullmatch(r"turned to 1\.0\d rad\n", out.decode())
-        assert (await stop(node, signal.SIGINT))[0] == 0
+    node = ("--namespace", "/robot1")
+    out = await _run_beside(_script(tmp_path / "serve.py", SERVE_SNIPPETS[0]), DEADLINE, *node)
+    assert re.fullmatch(r"turned to 1\.0\d rad\n", out)
