@@ -116,16 +116,19 @@ async def test_starts_docked_with_the_state_keys_and_frames(base: Any) -> None:
         assert len(cliff) == 4
         assert not any(robot.state[key] for key in cliff)
         assert {"odom", "base_link", "dock"} <= robot.poses.frames()
-        assert robot.control_period == pytest.approx(0.02, rel=0.1)  # the sim-node's stamps
-        # A control tick per odometry message, each writing the speeds: counted against each
-        # other (how many come in 4 s measures the machine; a sim-node held back sends fewer).
-        version, ticks, end = robot.state.version("v"), 0, robot.time() + 4.0
+        # Measured from the stamps: each gap is a whole number of the sim-node's 0.02 s ticks
+        # (more than one where a message was dropped on a loaded machine), however the
+        # messages bunch up on arrival.
+        assert robot.control_period >= 0.02 * (1 - 1e-9)
+        # A control tick per odometry message, each writing the speeds once: the version of
+        # ``v`` each tick sees goes up by one (how many ticks come in 4 s measures the
+        # machine; a sim-node held back sends fewer, and a burst runs back to back).
+        versions: list[int] = []
+        version, end = robot.state.version("v"), robot.time() + 4.0
 
         def tick() -> bool:
-            nonlocal ticks
-            ticks += 1
+            versions.append(robot.state.version("v"))
             return robot.time() >= end
 
         await robot.control(tick)
-        assert ticks >= 1
-        assert robot.state.version("v") - version == ticks
+        assert versions == list(range(version + 1, version + 1 + len(versions)))
