@@ -33,6 +33,7 @@ import threading
 from typing import Any
 
 import rclpy
+from action_msgs.msg import GoalStatus
 from irobot_create_msgs.action import Dock, DriveDistance, RotateAngle, Undock
 from irobot_create_msgs.msg import HazardDetection, HazardDetectionVector
 from rclpy.action import ActionClient
@@ -42,6 +43,7 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 
 WAIT = 60.0  # seconds any one answer of the robot may take
+ENDED_BY_AN_OBSTACLE = (GoalStatus.STATUS_CANCELED, GoalStatus.STATUS_ABORTED)
 
 
 class Create3Walker(Node):
@@ -97,7 +99,8 @@ class Create3Walker(Node):
         self.run(self.undock_client, Undock.Goal())
         for _ in range(moves):
             drive = DriveDistance.Goal(distance=chance.uniform(0.5, 1.5), max_translation_speed=0.3)
-            if self.run(self.drive_client, drive, forward=True).status == 5:  # CANCELED: a bump
+            # Cancelled on a bump, or aborted by the base (stalled against something): back off.
+            if self.run(self.drive_client, drive, forward=True).status in ENDED_BY_AN_OBSTACLE:
                 self.run(self.drive_client, DriveDistance.Goal(distance=-0.15))
             turn = chance.uniform(math.pi / 4, math.pi) * chance.choice((-1, 1))
             self.run(self.rotate_client, RotateAngle.Goal(angle=turn, max_rotation_speed=1.0))

@@ -26,6 +26,9 @@ from sensor_msgs.msg import BatteryState, Range  # noqa: E402
 from std_msgs.msg import Bool  # noqa: E402
 
 from pyrobots_aio.cli import main  # noqa: E402
+from pyrobots_aio.cli._main import parser  # noqa: E402
+from pyrobots_aio.cli._sim_robots import sim_robots  # noqa: E402
+from pyrobots_aio.motion import STALL_TIMEOUT  # noqa: E402
 
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator, Callable
@@ -173,6 +176,10 @@ async def test_faster_than_real_time_publishes_clock_and_stamps_with_it(
 def test_bad_options_are_refused(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["sim-node", "--rate", "0"]) == 2
     assert "argument --rate: expected a positive number, got '0'" in capsys.readouterr().err
+    assert main(["sim-node", "--stall-timeout", "inf"]) == 2
+    assert (
+        "argument --stall-timeout: expected a positive number, got 'inf'" in capsys.readouterr().err
+    )
     assert main(["sim-node", "--namespace", "/robot 1"]) == 1
     assert capsys.readouterr().err.endswith(
         "pyrobots-aio: error: ROS 2 rejects the namespace '/robot 1': Invalid namespace: "
@@ -218,3 +225,13 @@ async def test_ticks_caught_up_after_a_stop_are_stamped_when_the_world_was_so(
 
 def _seconds(odom: Any) -> float:
     return float(odom.header.stamp.sec + odom.header.stamp.nanosec * 1e-9)
+
+
+def test_each_robot_gets_the_stall_timeout_and_control_rate_given() -> None:
+    options = parser().parse_args(
+        ["sim-node", "--robots", "2", "--stall-timeout", "20", "--control-rate", "25"]
+    )
+    robots = [robot for robot, _ in sim_robots(options)]
+    assert [robot.stall_timeout for robot in robots] == [20.0, 20.0]
+    assert [robot.control_period for robot in robots] == [0.04, 0.04]
+    assert parser().parse_args(["sim-node"]).stall_timeout == STALL_TIMEOUT

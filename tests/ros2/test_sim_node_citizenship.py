@@ -73,11 +73,8 @@ async def test_ros_args_remap_set_use_sim_time_and_a_nan_flood_is_one_burst_on_r
         async with asyncio.timeout(DEADLINE):
             await matched.wait()  # cmd_vel remapped: sim-node listens on /teleop_cmd
             assert (await clock.get()).clock.sec < 1000  # use_sim_time: stamps are simulated
-            assert await parameters(tool, "/citizen", ["rate", "cmd_timeout", "profile"]) == [
-                1.0,
-                0.5,
-                "standard",
-            ]
+            served = ["rate", "cmd_timeout", "stall_timeout", "profile"]
+            assert await parameters(tool, "/citizen", served) == [1.0, 0.5, 1.5, "standard"]
             assert await parameters(tool, "/citizen", ["use_sim_time"]) == [True]
             for _ in range(2000):
                 teleop.publish(twist(math.nan))

@@ -23,6 +23,7 @@ OPTIONS = {
     "rate": "--rate",
     "control_rate": "--control-rate",
     "cmd_timeout": "--cmd-timeout",
+    "stall_timeout": "--stall-timeout",
     "seed": "--seed",
     "profile": "--profile",
 }

@@ -61,6 +61,9 @@ topic                         type                          QoS
 action servers ``undock``, ``dock``, ``drive_distance``, ``rotate_angle`` and
 ``navigate_to_position`` over the simulated robot's own motion actions
 (``pyrobots_aio.ros2.serve_create3``), so a Create 3 program runs against it.
+A motion that pushes for ``--stall-timeout`` simulated seconds (1.5) without
+progress fails (`StallError`), and its goal is aborted, as a base's firmware
+gives up.
 """
 
 from __future__ import annotations
@@ -74,6 +77,7 @@ import signal
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from pyrobots_aio.loops import run_scaled
+from pyrobots_aio.motion import STALL_TIMEOUT
 from pyrobots_aio.ros2 import CREATE3, PROFILES, STANDARD, Odometry, serve_create3
 
 from ._bursts import Refusals
@@ -139,6 +143,14 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         default=0.5,
         metavar="SECONDS",
         help="stop the wheels when no cmd_vel came for this long (default: 0.5)",
+    )
+    node.add_argument(
+        "--stall-timeout",
+        type=positive,
+        default=STALL_TIMEOUT,
+        metavar="SECONDS",
+        help="simulated seconds a motion may push without progress before it fails, as a "
+        f"base's firmware gives up (default: {STALL_TIMEOUT:g})",
     )
     node.add_argument("--seed", type=int, default=0, help="seeds the IR noise (default: 0)")
     node.add_argument(

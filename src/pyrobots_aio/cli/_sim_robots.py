@@ -68,7 +68,15 @@ def sim_robots(options: argparse.Namespace) -> list[tuple[SimRobot, str]]:
     world = SimWorld(seed=options.seed, robots=options.robots)
     namespaces = robot_namespaces(options.namespace, options.robots)
     return [
-        (SimRobot(world=body, realtime=True, control_rate=options.control_rate), namespace)
+        (
+            SimRobot(
+                world=body,
+                realtime=True,
+                control_rate=options.control_rate,
+                stall_timeout=options.stall_timeout,
+            ),
+            namespace,
+        )
         for body, namespace in zip(world.robots, namespaces, strict=True)
     ]
 
