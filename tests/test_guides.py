@@ -26,6 +26,7 @@ from snippets_support import (
     guides,
     run_snippet,
 )
+from test_exports import EXPORTS
 
 BLOCKS = [block for page in guides() for block in all_blocks(page)]
 PROGRAMS = [block for block in BLOCKS if (block.language, block.marker) == ("python", "")]
@@ -73,17 +74,25 @@ def _documented(target: str) -> set[str]:
     return set(namespace.__all__)
 
 
+def _targets() -> set[str]:
+    """What the API reference's pages document, a ``::: target`` each (a namespace or a name)."""
+    pages = (GUIDES / "reference").glob("*.md")
+    return {
+        target
+        for page in pages
+        for target in re.findall(r"^::: (pyrobots_aio[\w.]*)$", page.read_text(), re.MULTILINE)
+    }
+
+
 def _reference() -> set[str]:
     """Every name the API reference's pages document (the top page's own are listed by name)."""
-    pages = (GUIDES / "reference").glob("*.md")
-    targets = [
-        t
-        for p in pages
-        for t in re.findall(r"^::: (pyrobots_aio\.[\w.]+)$", p.read_text(), flags=re.MULTILINE)
-    ]
-    return {name for target in targets for name in _documented(target)}
+    return {name for target in _targets() - {"pyrobots_aio"} for name in _documented(target)}
 
 
 def test_the_reference_documents_every_public_name() -> None:
     unexplained_alias = {"ActionCancelled"}  # asyncio.CancelledError: the page says so in words
     assert set(pyrobots_aio.__all__) - unexplained_alias <= _reference()
+
+
+def test_the_reference_has_a_page_for_every_public_namespace() -> None:
+    assert set(EXPORTS) - {"pyrobots_aio"} <= _targets()
