@@ -71,8 +71,7 @@ def test_replay_of_a_truncated_recording_summarises_the_good_part(
     ]
     assert done.stderr.splitlines() == [
         f"pyrobots-aio: error: {cut}:9: truncated line: it ends before its JSON object does "
-        "(was the recorder closed?)",
-        "(the summary covers the 7 events before that line)",
+        "(was the recorder closed?) (the summary covers the 7 events before it)",
     ]
     assert "truncated line" in page.read_text()
 

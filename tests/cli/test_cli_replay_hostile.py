@@ -30,7 +30,7 @@ RUN = (
 MAGIC = b"\x89MCAP0\r\n"
 HEADER = {"format": "pyrobots_aio.recording", "version": 2, "t0": 0.0}
 BLOCK = 128 * 1024
-COVERS = "(the summary covers the 0 events before that line)"
+COVERS = " (the summary covers the 0 events before it)"
 
 
 def _replay(*args: str) -> subprocess.CompletedProcess[str]:
@@ -111,7 +111,7 @@ def test_a_decompression_bomb_stops_at_the_size_it_declares(
     at = _file(path, _chunk(compression, bomb(), 100))  # type: ignore[operator]
     done = _replay(str(path))
     problem = f"the chunk at byte {at} inflates past the 100 bytes it declares"
-    _expect(done, f"pyrobots-aio: error: {path}:1: {problem} (a decompression bomb?)", COVERS)
+    _expect(done, f"pyrobots-aio: error: {path}:1: {problem} (a decompression bomb?)" + COVERS)
 
 
 def test_a_chunk_declaring_far_more_than_its_file_could_hold_is_refused(tmp_path: Path) -> None:
@@ -124,7 +124,7 @@ def test_a_chunk_declaring_far_more_than_its_file_could_hold_is_refused(tmp_path
         f"than 50 times the {at + len(chunk)} bytes of file they come from "
         "(a decompression bomb?)"
     )
-    _expect(done, f"pyrobots-aio: error: {path}:1: {problem}", COVERS)
+    _expect(done, f"pyrobots-aio: error: {path}:1: {problem}" + COVERS)
 
 
 def test_a_chunk_larger_than_the_limit_is_refused_before_decompressing(tmp_path: Path) -> None:
@@ -132,7 +132,7 @@ def test_a_chunk_larger_than_the_limit_is_refused_before_decompressing(tmp_path:
     at = _file(path, _chunk("zstd", _zeros_zstd(BLOCK), 1 << 40))
     done = _replay(str(path))
     problem = f"the chunk at byte {at} declares {1 << 40} bytes (the most read: {256 << 20})"
-    _expect(done, f"pyrobots-aio: error: {path}:1: {problem}", COVERS)
+    _expect(done, f"pyrobots-aio: error: {path}:1: {problem}" + COVERS)
 
 
 def test_an_endless_device_is_refused() -> None:

@@ -77,11 +77,8 @@ def run_replay(options: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             return 1
         print(f"\ntimeline written to {shown(options.timeline)}", file=out)
     if recording.error is not None:
-        print(
-            f"pyrobots-aio: error: {shown(recording.error)}\n"
-            f"(the summary covers the {len(recording.events)} events before that line)",
-            file=err,
-        )
+        covered = f"the summary covers the {len(recording.events)} events before it"
+        print(f"pyrobots-aio: error: {shown(recording.error)} ({covered})", file=err)
         return 1
     return 0
 
