@@ -8,6 +8,10 @@ watches the camera stream. When the stream is lost, the emergency stop cuts
 the motors and ends the plan where it stands: the walk has slipped and its
 retry is waiting out its backoff, holding no limb, yet it is stopped and
 never walks again; the machine takes its failure path, the recovery.
+While the stop is latched, the steps refuse to move (as a `DriveBase`
+refuses motion), and a stop during the recovery starts it again.
+`supervise` is the controller of a running humanoid: the behaviour that
+tests/examples/test_master_controller_explore.py explores.
 
 Run: ``python examples/master_controller.py``
 """
@@ -15,11 +19,13 @@ Run: ``python examples/master_controller.py``
 from __future__ import annotations
 
 import asyncio
+import itertools
 import logging
 from typing import TYPE_CHECKING
 
 from pyrobots_aio import (
     CompoundResource,
+    EmergencyStopError,
     HealthMonitor,
     Outcome,
     Resource,
@@ -63,10 +69,20 @@ class Humanoid(Robot):
         self.state.motors = False  # the emergency stop cuts the motors first
         super().halt_actuators()
 
+    async def move(self, step: str, seconds: float) -> None:
+        """Move the limbs for ``seconds``: refused while the emergency stop is latched.
+
+        As a `DriveBase` refuses motion: a step that starts under the stop (the
+        camera was lost before the plan began) fails, and the plan with it.
+        """
+        if self.emergency_stop_reason is not None:
+            raise EmergencyStopError(step, self.emergency_stop_reason)
+        await self.sleep(seconds)
+
     @action
     @lock(ARMS)
     async def grasp_cup(self) -> str:
-        await self.sleep(0.3)
+        await self.move("grasp_cup", 0.3)
         return "cup grasped"
 
     @retry(4, backoff=exponential(0.1, factor=2))  # 0.1 s, 0.2 s, 0.4 s between attempts
@@ -74,7 +90,7 @@ class Humanoid(Robot):
     @lock(ARMS)
     async def lift(self) -> str:
         self.lift_attempts += 1
-        await self.sleep(0.2)
+        await self.move("lift", 0.2)
         if self.lift_attempts < 3:
             raise RuntimeError(f"arm controller timeout (attempt {self.lift_attempts})")
         return f"cup lifted (attempt {self.lift_attempts})"
@@ -85,10 +101,10 @@ class Humanoid(Robot):
     @lock(LEGS)
     async def walk_to_table(self) -> str:
         self.walk_attempts += 1
-        await self.sleep(1.0)
+        await self.move("walk_to_table", 1.0)
         if self.walk_attempts == 1:
             raise RuntimeError("slipped on the rug")
-        await self.sleep(4.0)
+        await self.move("walk_to_table", 4.0)
         return "at the table"
 
     @action
@@ -120,6 +136,7 @@ MASTER = StateMachine(
         ("plan", "done", Outcome.SUCCEEDED),
         ("plan", "recover", Outcome.FAILED),
         ("recover", "safe", Outcome.SUCCEEDED),
+        ("recover", "recover", Outcome.FAILED),  # a stop during the recovery: recover again
     ],
 )
 
@@ -130,26 +147,36 @@ def status(robot: Humanoid) -> str:
     return f"{held} in use, motors {'on' if robot.state.motors else 'off'}"
 
 
-async def camera(robot: Humanoid, frames: int) -> None:
-    """The camera driver: 30 Hz, until it crashes after ``frames`` frames."""
-    for _ in range(frames):
+@action
+async def camera(robot: Humanoid, frames: int | None) -> None:
+    """The camera driver: 30 Hz, until it crashes after ``frames`` frames (None: it does not)."""
+    for _ in itertools.count() if frames is None else range(frames):
         robot.state.camera = robot.time()
         await asyncio.sleep(1 / CAMERA_RATE)
 
 
+async def supervise(robot: Humanoid, camera_frames: int | None = 75) -> list[str]:
+    """The master controller of a running humanoid, its camera crashing after ``camera_frames``.
+
+    Returns the report; it ends with the phase the machine ended in.
+    """
+    robot.state.update(camera=0.0, motors=True, pose="home")
+    driver = camera(robot, camera_frames)  # a background action, beside the plan
+    health = HealthMonitor(robot)
+    health.watch("camera", warn_after=0.1, stale_after=0.5)
+    health.start()
+    robot.whenever("health_camera", becomes="stale").do(robot.emergency_stop, "camera lost")
+    phase = await MASTER(robot)
+    driver.cancel("the plan is over")  # (75 frames: it has crashed by then)
+    await driver.wait_done()
+    pose, camera_health = robot.state.pose, robot.state.health
+    robot.note(f"{phase}: pose {pose}, camera {camera_health}, {status(robot)}")
+    return robot.report
+
+
 async def main(instruments: Iterable[Instrument] = ()) -> list[str]:
     async with Humanoid(instruments) as robot:
-        robot.state.update(camera=0.0, motors=True, pose="home")
-        driver = asyncio.create_task(camera(robot, frames=75))  # 2.5 s, then it crashes
-        health = HealthMonitor(robot)
-        health.watch("camera", warn_after=0.1, stale_after=0.5)
-        health.start()
-        robot.whenever("health_camera", becomes="stale").do(robot.emergency_stop, "camera lost")
-        phase = await MASTER(robot)
-        await driver
-        pose, camera_health = robot.state.pose, robot.state.health
-        robot.note(f"{phase}: pose {pose}, camera {camera_health}, {status(robot)}")
-        return robot.report
+        return await supervise(robot)
 
 
 if __name__ == "__main__":

@@ -3,14 +3,25 @@
 from __future__ import annotations
 
 import asyncio
+from typing import TYPE_CHECKING
 
-from pyrobots_aio import ActionSpawned, ResourceAcquired, ResourceReleased, action
+import pytest
+
+from pyrobots_aio import (
+    ActionSpawned,
+    InvariantViolation,
+    ResourceAcquired,
+    ResourceReleased,
+    action,
+)
+from pyrobots_aio.resources import _rules
 from pyrobots_aio.testing import FakeBase
 from pyrobots_aio.testing.explore import (
     At,
     Bump,
     EmergencyStop,
     Hit,
+    Preempt,
     Scenario,
     completes,
     ends_docked,
@@ -19,6 +30,9 @@ from pyrobots_aio.testing.explore import (
     no_resource_held_twice,
     still_while_stopped,
 )
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 
 def _violations(behaviour: object, invariant: object, *hits: Hit) -> list[str]:
@@ -89,6 +103,30 @@ def test_two_holders_of_one_resource_break_no_resource_held_twice() -> None:
     invariant = no_resource_held_twice()
     seen = _violations(behaviour, invariant)
     assert seen == ["at t=0.300 c #3 acquired 'wheels' held by action #1"]
+
+
+def test_a_real_double_hold_is_found_and_shrunk_to_the_reflex_that_took_the_wheels(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    async def drive(robot: FakeBase) -> None:
+        await robot.drive_distance(0.5)
+
+    scenario = Scenario(
+        drive,
+        base=FakeBase,
+        disturbances=[Preempt],  # a reflex that takes the wheels (preempt=True)
+        invariants=[no_resource_held_twice()],
+        horizon=2.0,
+    )
+    scenario.explore(examples=20)  # the lock manager preempts the drive: held once, always
+    # a planted bug: the lock manager no longer sees a holder in a request's way
+    monkeypatch.setattr(_rules, "holder_in_way", lambda grant, leaf: None)
+    with pytest.raises(InvariantViolation) as found:
+        scenario.explore(examples=20, record_dir=tmp_path)
+    assert found.value.schedule == (Hit(Preempt(0.1), At(0.0)),)
+    assert found.value.violations == (
+        "at t=0.000 preempting_reflex #2 acquired 'wheels' held by action #1",
+    )
 
 
 def test_completes_and_ends_docked() -> None:
