@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from ros2_support import DEADLINE, require_rclpy
 
-from snippets_support import GUIDES, README, blocks
+from snippets_support import GUIDES, README, RUN_ELSEWHERE, all_blocks, blocks
 
 require_rclpy()
 pytest.importorskip(
@@ -20,7 +20,8 @@ pytest.importorskip(
 
 from test_sim_node import sim_node, stop  # noqa: E402
 
-DOCUMENTS = (README, GUIDES / "guides" / "ros2.md")
+GUIDE = GUIDES / "guides" / "ros2.md"
+DOCUMENTS = (README, GUIDE)
 
 
 def _snippets(marker: str) -> list[str]:
@@ -44,6 +45,15 @@ def test_the_readme_has_a_ros2_snippet() -> None:
         assert "pyrobots-aio sim-node --namespace /robot1 --profile create3 --rate 4" in text
         assert "pyrobots-aio sim-node --namespace /robot1 --rate 4" in text
         assert "pyrobots-aio sim-node --namespace /robot1" in text
+
+
+def test_the_guide_counts_its_snippets_and_says_nothing_served_is_missing() -> None:
+    numbers = ("no", "one", "two", "three", "four", "five", "six")
+    ran_here = [b for b in all_blocks(GUIDE) if b.marker in RUN_ELSEWHERE]
+    text = GUIDE.read_text()
+    assert f"The {numbers[len(ran_here)]} snippets of this page" in text
+    assert "## The executive served to ROS 2" in text
+    assert "not built yet" not in text
 
 
 def _script(path: Path, code: str) -> Path:
