@@ -5,8 +5,9 @@ Before rclpy starts, discovery is kept on localhost and a random
 subprocesses), so parallel runs never cross-talk. The tests skip, with the
 reason, when rclpy is not importable; ``nox -s ros2`` sets
 ``PYROBOTS_AIO_REQUIRE_ROS2=1``, which makes a missing rclpy an error
-instead. These are real-time tests: they wait on events under generous
-``asyncio.timeout`` deadlines, never on sleeps.
+instead, and so what a test module asks for through ``ros2_support.require``
+(the simulator, a built interface package). These are real-time tests: they
+wait on events under generous ``asyncio.timeout`` deadlines, never on sleeps.
 """
 
 from __future__ import annotations
@@ -25,12 +26,10 @@ import pytest_asyncio
 if TYPE_CHECKING:
     from collections.abc import AsyncIterator, Callable, Iterator, Mapping
 
-from ros2_support import SKIP_REASON, PlainNode
+from ros2_support import REQUIRE, SKIP_REASON, PlainNode
 
 from pyrobots_aio import Robot
 from pyrobots_aio.ros2 import attach_ros2
-
-REQUIRE = "PYROBOTS_AIO_REQUIRE_ROS2"
 
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["ROS_DOMAIN_ID"] = str(random.SystemRandom().randint(1, 101))

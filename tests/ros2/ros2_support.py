@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import importlib
 import importlib.util
+import os
 import re
 import subprocess
 import sys
@@ -23,6 +25,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterator, Mapping
     from types import ModuleType
 
+REQUIRE = "PYROBOTS_AIO_REQUIRE_ROS2"
+"""Set to 1 (as ``nox -s ros2`` does), a missing ROS 2 part fails the tests instead of skipping."""
 SKIP_REASON = (
     "the ROS 2 Python wheels are not installed: pip install 'pyrobots-aio[ros2]' "
     "ros-test-msgs ros-std-srvs (nox -s ros2 runs these tests)"
@@ -48,9 +52,34 @@ def silence_options(rate: float) -> tuple[str, ...]:
     return ("--rate", str(rate), "--cmd-timeout", str(PEER_SILENCE * rate))
 
 
+def require(module: str, reason: str) -> None:
+    """Skip the caller (a test, or its module) with ``reason`` when ``module`` cannot be imported.
+
+    Under ``PYROBOTS_AIO_REQUIRE_ROS2=1`` (``nox -s ros2``, where none may skip) the caller
+    fails instead, naming the module: a missing build is an error there, not a quiet skip.
+    """
+    if os.environ.get(REQUIRE) != "1":
+        pytest.importorskip(module, reason=reason)
+        return
+    try:
+        importlib.import_module(module)
+    except ImportError as error:
+        pytest.fail(f"{REQUIRE}=1 but {module} cannot be imported ({error}): {reason}", False)
+
+
 def require_rclpy() -> None:
-    """Skip the calling test module (with the reason) when rclpy is missing."""
-    pytest.importorskip("rclpy", reason=SKIP_REASON)
+    """The caller needs rclpy (see `require`)."""
+    require("rclpy", SKIP_REASON)
+
+
+def require_sim() -> None:
+    """The caller needs the simulator (a sim-node; see `require`)."""
+    require("mujoco", "sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'")
+
+
+def require_interfaces(package: str) -> None:
+    """The caller needs an interface package PyPI lacks, built here (see `require`)."""
+    require(package, f"it is not built: pyrobots-aio ros2 interfaces build {package}")
 
 
 async def wait_for(predicate: Callable[[], bool], period: float = 0.02) -> None:

@@ -7,13 +7,11 @@ import re
 from pathlib import Path
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy, run_script
+from ros2_support import DEADLINE, require_interfaces, require_rclpy, require_sim, run_script
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
-pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+require_sim()
+require_interfaces("irobot_create_msgs")
 
 from test_sim_node import sim_node  # noqa: E402
 

@@ -9,13 +9,11 @@ from __future__ import annotations
 import asyncio
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy, sim_node_process
+from ros2_support import DEADLINE, require_interfaces, require_rclpy, require_sim, sim_node_process
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
-pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+require_sim()
+require_interfaces("irobot_create_msgs")
 
 from rclpy.action import get_action_client_names_and_types_by_node  # noqa: E402
 

@@ -9,13 +9,18 @@ import signal
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from ros2_support import DEADLINE, next_where, require_rclpy, wait_for
+from ros2_support import (
+    DEADLINE,
+    next_where,
+    require_interfaces,
+    require_rclpy,
+    require_sim,
+    wait_for,
+)
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
-pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+require_sim()
+require_interfaces("irobot_create_msgs")
 
 from action_msgs.msg import GoalStatus  # noqa: E402
 from irobot_create_msgs.action import (  # noqa: E402

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy
+from ros2_support import DEADLINE, REQUIRE, require_rclpy
 
 from pyrobots_aio import InterfaceBuildError
 from pyrobots_aio.ros2 import InterfaceOutcome, _interfaces, build_interfaces, interface_packages
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from collections.abc import Iterator
 
 require_rclpy()
-if missing_tools() and os.environ.get("PYROBOTS_AIO_REQUIRE_ROS2") != "1":
+if missing_tools() and os.environ.get(REQUIRE) != "1":
     pytest.skip(
         f"cannot build ROS 2 interfaces here: {'; '.join(missing_tools())}",
         allow_module_level=True,

@@ -7,12 +7,10 @@ import re
 from pathlib import Path
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy, run_script
+from ros2_support import DEADLINE, require_rclpy, require_sim, run_script
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 EXAMPLE = Path(__file__).parent.parent.parent / "examples" / "random_walk_ros2.py"
 

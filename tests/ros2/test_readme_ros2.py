@@ -9,14 +9,12 @@ import sys
 from pathlib import Path
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy
+from ros2_support import DEADLINE, require_interfaces, require_rclpy, require_sim
 
 from snippets_support import GUIDES, README, RUN_ELSEWHERE, all_blocks, blocks
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 from test_sim_node import sim_node, stop  # noqa: E402
 
@@ -91,7 +89,7 @@ async def test_the_ros2_snippet_drives_a_sim_node(tmp_path: Path) -> None:
 @pytest.mark.parametrize("profile", ["standard", "create3"])
 async def test_the_ros2_robot_snippets_walk_a_sim_node(tmp_path: Path, profile: str) -> None:
     if profile == "create3":
-        pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+        require_interfaces("irobot_create_msgs")
     code = (ROBOT_SNIPPETS if profile == "standard" else CREATE3_SNIPPETS)[0]
     node = ("--namespace", "/robot1", "--rate", "4", "--profile", profile)
     out = await _run_beside(_script(tmp_path / "walk.py", code), DEADLINE * 2, *node)
@@ -100,7 +98,7 @@ async def test_the_ros2_robot_snippets_walk_a_sim_node(tmp_path: Path, profile: 
 
 @pytest.mark.asyncio
 async def test_the_served_action_snippet_turns_a_sim_node(tmp_path: Path) -> None:
-    pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+    require_interfaces("irobot_create_msgs")
     node = ("--namespace", "/robot1")
     out = await _run_beside(_script(tmp_path / "serve.py", SERVE_SNIPPETS[0]), DEADLINE, *node)
     assert re.fullmatch(r"turned to 1\.0\d rad\n", out)

@@ -25,14 +25,13 @@ from ros2_support import (
     PEER_SILENCE,
     load_suite,
     require_rclpy,
+    require_sim,
     silence_options,
     sim_node_process,
 )
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 from pyrobots_aio import DriveBase  # noqa: E402
 from pyrobots_aio.ros2 import Ros2Robot  # noqa: E402

@@ -6,7 +6,7 @@ import dataclasses
 import math
 
 import pytest
-from ros2_support import require_rclpy
+from ros2_support import require_interfaces, require_rclpy
 
 require_rclpy()
 
@@ -91,7 +91,7 @@ def test_a_second_profile_sits_beside_the_standard_one_and_names_the_topics() ->
 
 
 def create3_topics() -> dict[str, object]:
-    pytest.importorskip("irobot_create_msgs", reason="pyrobots-aio ros2 interfaces build")
+    require_interfaces("irobot_create_msgs")
     return {t.role: t for t in CREATE3.sensors(SENSORS)}
 
 

@@ -16,14 +16,13 @@ from ros2_support import (
     PEER_SILENCE,
     assert_stale_error,
     require_rclpy,
+    require_sim,
     silence_options,
     sim_node_process,
 )
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 from geometry_msgs.msg import Twist  # noqa: E402
 

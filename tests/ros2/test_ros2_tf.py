@@ -15,10 +15,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
-from ros2_support import DEADLINE, next_where, require_rclpy, sim_node_process
+from ros2_support import DEADLINE, next_where, require_interfaces, require_rclpy, sim_node_process
 
 require_rclpy()
-pytest.importorskip("tf2_msgs", reason="tf needs: pyrobots-aio ros2 interfaces build tf2_msgs")
+require_interfaces("tf2_msgs")
 
 from geometry_msgs.msg import TransformStamped  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402

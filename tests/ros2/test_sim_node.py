@@ -11,12 +11,10 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from ros2_support import DEADLINE, next_where, require_rclpy, wait_for
+from ros2_support import DEADLINE, next_where, require_rclpy, require_sim, wait_for
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 from geometry_msgs.msg import Twist  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402

@@ -21,14 +21,13 @@ from ros2_support import (
     SIM_NODE,
     next_where,
     require_rclpy,
+    require_sim,
     sim_node_process,
     wait_for,
 )
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 from geometry_msgs.msg import Twist  # noqa: E402
 from rcl_interfaces.msg import Log  # noqa: E402

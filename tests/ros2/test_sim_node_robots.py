@@ -12,12 +12,10 @@ import signal
 from typing import TYPE_CHECKING
 
 import pytest
-from ros2_support import DEADLINE, require_rclpy, sim_node_process, wait_for
+from ros2_support import DEADLINE, require_rclpy, require_sim, sim_node_process, wait_for
 
 require_rclpy()
-pytest.importorskip(
-    "mujoco", reason="sim-node needs the sim extra: pip install 'pyrobots-aio[sim]'"
-)
+require_sim()
 
 from pyrobots_aio.cli import main  # noqa: E402
 from pyrobots_aio.ros2 import Ros2Robot  # noqa: E402
