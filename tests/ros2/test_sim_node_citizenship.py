@@ -8,6 +8,7 @@ or the way the operating system does (the multicast groups joined).
 from __future__ import annotations
 
 import asyncio
+import itertools
 import math
 import os
 import signal
@@ -30,6 +31,7 @@ require_rclpy()
 require_sim()
 
 from geometry_msgs.msg import Twist  # noqa: E402
+from nav_msgs.msg import Odometry  # noqa: E402
 from rcl_interfaces.msg import Log  # noqa: E402
 from rcl_interfaces.srv import GetParameters  # noqa: E402
 from rosgraph_msgs.msg import Clock  # noqa: E402
@@ -46,17 +48,36 @@ IGMP = Path("/proc/net/igmp")
 ANSWER = 5.0  # seconds a parameter request waits for its answer before it is made again
 
 
-def twist(v: float) -> Twist:
+def twist(v: float, w: float = 0.0) -> Twist:
     message = Twist()
-    message.linear.x = v
+    message.linear.x, message.angular.z = v, w
     return message
 
 
-def stopped(process: subprocess.Popen[bytes]) -> tuple[int, str, str]:
+def stopped_node(process: subprocess.Popen[bytes]) -> tuple[int, str, str]:
     """SIGINT, then the exit code, standard output and standard error (the test is over)."""
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=DEADLINE)
     return process.returncode, out.decode(), err.decode()
+
+
+# Commands that are not finite; one part finite (0.2 m/s forward, a turn of NaN) would move the
+# robot if only the other were checked. Which comes first to the node is not known: a flood
+# overwrites the oldest of the publisher's and the subscription's last 10 before they go out.
+NAN_FLOOD = [(math.nan, 0.0), (0.2, math.nan)]
+INF_FLOOD = [(math.inf, 0.0), (0.2, -math.inf), (-math.inf, 0.0)]
+SETTLED = 1e-5  # m/s, rad/s: a stopped robot has rung down (its first ticks rock by 2 mm/s)
+STILL = 1e-4  # the same, with margin: what a robot at rest never exceeds
+
+
+def still(odom: Odometry, below: float = STILL) -> bool:
+    return abs(odom.twist.twist.linear.x) < below and abs(odom.twist.twist.angular.z) < below
+
+
+def flood(teleop: Any, commands: list[tuple[float, float]], count: int) -> None:
+    """Publish ``count`` commands, cycling through ``commands``, as fast as rclpy sends them."""
+    for v, w in itertools.islice(itertools.cycle(commands), count):
+        teleop.publish(twist(v, w))
 
 
 @pytest.mark.asyncio
@@ -66,8 +87,13 @@ async def test_ros_args_remap_set_use_sim_time_and_a_nan_flood_is_one_burst_on_r
     tool = plain("citizen_tool")
     rosout = tool.inbox("/rosout", Log, 100)
     clock = tool.inbox("/clock", Clock)
+    odometry = tool.inbox("/odom", Odometry)
     teleop, matched = tool.publisher("/teleop_cmd", Twist)
     ros_args = ("-r", "__node:=citizen", "-r", "cmd_vel:=/teleop_cmd", "-p", "use_sim_time:=true")
+
+    def from_citizen(word: str) -> Callable[[Log], bool]:
+        return lambda m: m.name == "citizen" and word in m.msg
+
     with sim_node_process("--ros-args", *ros_args) as process:
         async with asyncio.timeout(DEADLINE):
             await matched.wait()  # cmd_vel remapped: sim-node listens on /teleop_cmd
@@ -75,23 +101,50 @@ async def test_ros_args_remap_set_use_sim_time_and_a_nan_flood_is_one_burst_on_r
             served = ["rate", "cmd_timeout", "stall_timeout", "profile"]
             assert await parameters(tool, "/citizen", served) == [1.0, 0.5, 1.5, "standard"]
             assert await parameters(tool, "/citizen", ["use_sim_time"]) == [True]
-            for _ in range(2000):
-                teleop.publish(twist(math.nan))
-            first = await next_where(rosout, lambda m: m.name == "citizen" and "refused" in m.msg)
-            over = await next_where(rosout, lambda m: m.name == "citizen" and "burst" in m.msg)
-            teleop.publish(twist(0.0))
-        code, out, err = stopped(process)
-    assert (first.level, over.level) == (Log.WARN, Log.WARN)
-    assert first.msg == (
-        "/teleop_cmd: refused a command that is not finite (nan, 0.0): stopped; counting the "
-        "refusals until 1 s pass without one"
-    )
-    assert over.msg.startswith("/teleop_cmd: the burst is over: ")
-    refused = int(over.msg.split(": ")[2].split()[0])
-    assert 1 <= refused <= 2000
+            while (await odometry.get()).twist.twist.linear.x < 0.1:  # off it goes, as teleop
+                teleop.publish(twist(0.2))
+            flood(teleop, NAN_FLOOD, 2000)
+            bursts = [
+                (
+                    await next_where(rosout, from_citizen("refused")),
+                    await next_where(rosout, from_citizen("burst")),
+                )
+            ]
+            stopped = await next_where(odometry, lambda o: still(o, SETTLED))
+            flood(teleop, INF_FLOOD, 2000)  # a quiet second after the first: a burst again
+            bursts.append(
+                (
+                    await next_where(rosout, from_citizen("refused")),
+                    await next_where(rosout, from_citizen("burst")),
+                )
+            )
+            # The odometry since the robot stopped: still through the second flood (what the
+            # node published up to the second burst's end, which came a second after it).
+            seen = [stopped]
+            while not odometry.empty():
+                seen.append(odometry.get_nowait())
+            end = seen[-1].header.stamp.sec + 1
+            while seen[-1].header.stamp.sec < end:
+                seen.append(await odometry.get())
+        code, out, err = stopped_node(process)
+    for (first, over), commands in zip(bursts, (NAN_FLOOD, INF_FLOOD), strict=True):
+        assert (first.level, over.level) == (Log.WARN, Log.WARN)
+        assert first.msg in {
+            f"/teleop_cmd: refused a command that is not finite ({v!r}, {w!r}): stopped; "
+            "counting the refusals until 1 s pass without one"
+            for v, w in commands
+        }
+        assert over.msg.startswith("/teleop_cmd: the burst is over: ")
+        refused = int(over.msg.split(": ")[2].split()[0])
+        assert 1 <= refused <= 2000
+    assert [not still(o) for o in seen] == [False] * len(seen)  # the wheels stayed still
+    x, y = stopped.pose.pose.position.x, stopped.pose.pose.position.y
+    assert x > 0.0
+    moved = [(o.pose.pose.position.x - x, o.pose.pose.position.y - y) for o in seen]
+    assert moved == [pytest.approx((0.0, 0.0), abs=1e-4)] * len(seen)
     assert (code, out.splitlines()[-1]) == (0, "sim-node /citizen stopped")
     assert "Traceback" not in err
-    assert err.count("refused a command that is not finite") == 1
+    assert err.count("refused a command that is not finite") == 2
 
 
 async def parameters(tool: PlainNode, node: str, names: list[str]) -> list[Any]:
