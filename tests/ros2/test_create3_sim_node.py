@@ -9,8 +9,10 @@ import signal
 from typing import TYPE_CHECKING, Any
 
 import pytest
+import pytest_asyncio
 from ros2_support import (
     DEADLINE,
+    PEER_SILENCE,
     next_where,
     require_interfaces,
     require_rclpy,
@@ -32,6 +34,7 @@ from irobot_create_msgs.action import (  # noqa: E402
 )
 from irobot_create_msgs.msg import (  # noqa: E402
     DockStatus,
+    HazardDetection,
     HazardDetectionVector,
     IrIntensityVector,
 )
@@ -46,6 +49,7 @@ if TYPE_CHECKING:
     from ros2_support import PlainNode
 
 NS = "/create3"
+RATE = 4.0
 TOPICS = {
     "hazard_detection": "irobot_create_msgs/msg/HazardDetectionVector",
     "ir_intensity": "irobot_create_msgs/msg/IrIntensityVector",
@@ -76,6 +80,9 @@ class Goals:
             ]
         }
         self.odometry = node.inbox(f"{NS}/odom", Odometry, qos_profile_sensor_data)
+        self.hazards = node.inbox(
+            f"{NS}/hazard_detection", HazardDetectionVector, qos_profile_sensor_data
+        )
         node.spin()
 
     def future(self, rclpy_future: Any) -> asyncio.Future[Any]:
@@ -102,9 +109,49 @@ class Goals:
         return await self.future(handle.get_result_async())
 
 
-def create3_node() -> contextlib.AbstractAsyncContextManager[asyncio.subprocess.Process]:
-    """A ``sim-node --profile create3`` four times faster than real time."""
-    return sim_node("--namespace", NS, "--profile", "create3", "--rate", "4")
+@pytest_asyncio.fixture
+async def goals(plain: Callable[..., PlainNode]) -> Goals:
+    """A plain Create 3 program's action clients (its node is closed with the test)."""
+    return Goals(plain("create3_program", threads=2, spin=False))
+
+
+def create3_node(
+    *options: str,
+) -> contextlib.AbstractAsyncContextManager[asyncio.subprocess.Process]:
+    """A ``sim-node --profile create3`` four times faster than real time (and ``options``)."""
+    return sim_node("--namespace", NS, "--profile", "create3", "--rate", str(RATE), *options)
+
+
+def seconds(stamp: Any) -> float:
+    return float(stamp.sec + stamp.nanosec * 1e-9)
+
+
+def bumped(hazards: HazardDetectionVector) -> bool:
+    return any(d.type == HazardDetection.BUMP for d in hazards.detections)
+
+
+async def into_the_east_wall(goals: Goals) -> Any:
+    """Undock, then drive 5 m east at 0.3 m/s: the wall is 3.4 m ahead (the goal's handle)."""
+    await goals.run("undock", Undock.Goal())
+    return await goals.send(
+        "drive_distance", DriveDistance.Goal(distance=5.0, max_translation_speed=0.3)
+    )
+
+
+async def assert_stopped(odometry: asyncio.Queue[Any]) -> None:
+    """The base comes to rest and stays there (a simulated second later, the same pose)."""
+    while not odometry.empty():  # what came before the goal ended
+        odometry.get_nowait()
+    still = await next_where(
+        odometry,
+        lambda o: abs(o.twist.twist.linear.x) < 0.001 and abs(o.twist.twist.angular.z) < 0.001,
+    )
+    later = await next_where(odometry, lambda o: o.header.stamp.sec > still.header.stamp.sec)
+    for axis in ("x", "y", "z", "w"):
+        here = getattr(still.pose.pose.orientation, axis)
+        assert getattr(later.pose.pose.orientation, axis) == pytest.approx(here, abs=1e-3)
+    assert later.pose.pose.position.x == pytest.approx(still.pose.pose.position.x, abs=1e-3)
+    assert later.pose.pose.position.y == pytest.approx(still.pose.pose.position.y, abs=1e-3)
 
 
 @pytest.mark.asyncio
@@ -137,9 +184,8 @@ async def test_the_create3_topics_are_there_and_speak(plain: Callable[..., Plain
 
 @pytest.mark.asyncio
 async def test_the_create3_actions_undock_drive_turn_navigate_and_dock(
-    plain: Callable[..., PlainNode],
+    goals: Goals,
 ) -> None:
-    goals = Goals(plain("create3_program", threads=2, spin=False))
     odometry = goals.odometry
     async with asyncio.timeout(DEADLINE), create3_node() as process:
         undocked = await goals.run("undock", Undock.Goal())
@@ -177,9 +223,8 @@ async def test_the_create3_actions_undock_drive_turn_navigate_and_dock(
 
 @pytest.mark.asyncio
 async def test_a_cancelled_create3_goal_stops_the_base_and_ends_canceled(
-    plain: Callable[..., PlainNode],
+    goals: Goals,
 ) -> None:
-    goals = Goals(plain("create3_program", threads=2, spin=False))
     odometry = goals.odometry
     async with asyncio.timeout(DEADLINE), create3_node() as process:
         await goals.run("undock", Undock.Goal())
@@ -188,15 +233,76 @@ async def test_a_cancelled_create3_goal_stops_the_base_and_ends_canceled(
             "drive_distance", DriveDistance.Goal(distance=2.0, max_translation_speed=0.2), feedback
         )
         await wait_for(lambda: len(feedback) > 2)  # it drives
-        answer = await goals.future(handle.cancel_goal_async())
-        assert len(answer.goals_canceling) == 1
-        result = await goals.future(handle.get_result_async())
-        assert result.status == GoalStatus.STATUS_CANCELED
         # Stopped by the goal's end (the served goals drive the base with no cmd_vel at all).
-        while not odometry.empty():  # what came before the goal ended
-            odometry.get_nowait()
-        still = await next_where(odometry, lambda o: abs(o.twist.twist.linear.x) < 0.001)
-        later = await next_where(odometry, lambda o: o.header.stamp.sec > still.header.stamp.sec)
-        assert later.pose.pose.position.x == pytest.approx(still.pose.pose.position.x, abs=1e-3)
-        assert 0.35 < still.pose.pose.position.x < 1.0  # well short of the 2 m asked
+        await cancel(goals, handle)
+        latest = odometry.get_nowait() if not odometry.empty() else await odometry.get()
+        assert 0.35 < latest.pose.pose.position.x < 1.0  # well short of the 2 m asked
+        assert (await stop(process, signal.SIGINT))[0] == 0
+
+
+async def cancel(goals: Goals, handle: Any) -> None:
+    """Cancel ``handle``'s goal: the cancel is taken, the goal ends CANCELED, the base stops."""
+    answer = await goals.future(handle.cancel_goal_async())
+    assert len(answer.goals_canceling) == 1
+    result = await goals.future(handle.get_result_async())
+    assert result.status == GoalStatus.STATUS_CANCELED
+    await assert_stopped(goals.odometry)
+
+
+def rotation() -> RotateAngle.Goal:
+    """Ten turns at 0.5 rad/s: two minutes of simulated time, cancelled long before."""
+    return RotateAngle.Goal(angle=20 * math.pi, max_rotation_speed=0.5)
+
+
+def navigation() -> NavigateToPosition.Goal:
+    """To 3 m east of odom's origin at 5 cm/s: a minute of simulated time, cancelled before."""
+    goal = NavigateToPosition.Goal(achieve_goal_heading=True, max_translation_speed=0.05)
+    goal.goal_pose.header.frame_id = "odom"
+    goal.goal_pose.pose.position.x, goal.goal_pose.pose.orientation.w = 3.0, 1.0
+    return goal
+
+
+@pytest.mark.asyncio
+@pytest.mark.parametrize(
+    ("name", "goal"), [("rotate_angle", rotation), ("navigate_to_position", navigation)]
+)
+async def test_a_cancelled_turn_or_navigation_stops_the_base_and_ends_canceled(
+    goals: Goals, name: str, goal: Callable[[], Any]
+) -> None:
+    async with asyncio.timeout(DEADLINE), create3_node() as process:
+        await goals.run("undock", Undock.Goal())
+        feedback: list[Any] = []
+        handle = await goals.send(name, goal(), feedback)
+        await wait_for(lambda: len(feedback) > 2)  # it moves
+        await cancel(goals, handle)
+        assert (await stop(process, signal.SIGINT))[0] == 0
+
+
+@pytest.mark.asyncio
+async def test_a_bump_alone_does_not_end_a_create3_goal(goals: Goals) -> None:
+    """As on a Create 3 with its reflexes disabled: the program that sent the goal ends it."""
+    # A stall ends a goal that pushes: not within the test's wait (PEER_SILENCE of the wall
+    # clock), however long a loaded machine holds this test up.
+    stall = ("--stall-timeout", str(PEER_SILENCE * RATE))
+    async with asyncio.timeout(DEADLINE), create3_node(*stall) as process:
+        handle = await into_the_east_wall(goals)
+        bump = seconds((await next_where(goals.hazards, bumped)).header.stamp)
+        # Two simulated seconds later it still pushes, bumped, and the goal goes on.
+        await next_where(
+            goals.hazards, lambda h: bumped(h) and seconds(h.header.stamp) >= bump + 2.0
+        )
+        await cancel(goals, handle)  # it was still running: CANCELED
+        assert (await stop(process, signal.SIGINT))[0] == 0
+
+
+@pytest.mark.asyncio
+async def test_a_create3_goal_that_stalls_against_a_wall_is_aborted(
+    goals: Goals,
+) -> None:
+    async with asyncio.timeout(DEADLINE), create3_node("--stall-timeout", "1.5") as process:
+        handle = await into_the_east_wall(goals)
+        await next_where(goals.hazards, bumped)
+        result = await goals.future(handle.get_result_async())
+        assert result.status == GoalStatus.STATUS_ABORTED
+        await assert_stopped(goals.odometry)
         assert (await stop(process, signal.SIGINT))[0] == 0
