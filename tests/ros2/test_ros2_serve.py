@@ -15,10 +15,18 @@ require_rclpy()
 from action_msgs.msg import GoalStatus  # noqa: E402
 from rclpy.action import ActionClient, get_action_client_names_and_types_by_node  # noqa: E402
 from rclpy.impl.implementation_singleton import rclpy_implementation  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
+from std_srvs.srv import Empty, SetBool  # noqa: E402
 from test_msgs.action import Fibonacci  # noqa: E402
 
-from pyrobots_aio import ActionCancelled, Resource, Robot, action, lock  # noqa: E402
+from pyrobots_aio import (  # noqa: E402
+    ActionCancelled,
+    ActionHandle,
+    ActionState,
+    Resource,
+    Robot,
+    action,
+    lock,
+)
 from pyrobots_aio.ros2 import attach_ros2  # noqa: E402
 
 if TYPE_CHECKING:
@@ -38,7 +46,11 @@ class Client:
         self.first_loop = asyncio.new_event_loop()  # each test hands it its own (`meet`)
         self.node = PlainNode("plain_client", loop=self.first_loop)
         self.actions = ActionClient(self.node.node, Fibonacci, "/count")
-        self.service = self.node.node.create_client(SetBool, "/grip")
+        self.services = {
+            name: self.node.node.create_client(kind, name)
+            for name, kind in [("/grip", SetBool), ("/reset", Empty)]
+        }
+        self.service = self.services["/grip"]
 
     def future(self, rclpy_future: Any) -> asyncio.Future[Any]:
         future: asyncio.Future[Any] = self.node.loop.create_future()
@@ -47,14 +59,16 @@ class Client:
         )
         return future
 
-    async def meet(self, robot: Robot, *, action: bool = True) -> None:
-        """Wait until each end sees the other (a server answers only a client it matched)."""
+    async def meet(self, robot: Robot, name: str = "/count") -> None:
+        """Wait until each end of ``name`` sees the other (a server answers only a client it
+        matched)."""
         self.node.loop = asyncio.get_running_loop()
-        ready = self.actions.server_is_ready if action else self.service.service_is_ready
+        action = name == "/count"
+        ready = self.actions.server_is_ready if action else self.services[name].service_is_ready
         await wait_for(ready)
-        await wait_for(lambda: self._known(robot, action=action))
+        await wait_for(lambda: self._known(robot, name, action=action))
 
-    def _known(self, robot: Robot, *, action: bool) -> bool:
+    def _known(self, robot: Robot, name: str, *, action: bool) -> bool:
         node = robot.ros2.node
         try:
             if action:
@@ -63,7 +77,7 @@ class Client:
                 clients = node.get_client_names_and_types_by_node("plain_client", "/")
         except (rclpy_implementation.NodeNameNonExistentError, rclpy_implementation.RCLError):
             return False  # not discovered yet
-        return ("/count" if action else "/grip") in dict(clients)
+        return name in dict(clients)
 
     async def send(self, order: int, feedback: list[list[int]] | None = None) -> Any:
         def on_feedback(message: Any) -> None:
@@ -247,7 +261,7 @@ async def test_a_served_request_runs_as_an_action_and_its_return_is_the_response
 
     async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
         robot.ros2.serve_service("/grip", SetBool, grip)
-        await client.meet(robot, action=False)
+        await client.meet(robot, "/grip")
         response = await client.future(client.service.call_async(SetBool.Request(data=True)))
         assert (response.success, response.message) == (True, "closed")
 
@@ -295,3 +309,153 @@ async def test_a_goal_the_loop_does_not_decide_in_time_is_rejected_and_never_run
             assert started == []  # the start came to the loop after the refusal: nothing ran
     finally:
         logging.getLogger("pyrobots_aio.ros2").removeHandler(refusals)
+
+
+async def assert_paused(
+    robot: Robot, handle: ActionHandle[Any], feedback: list[list[int]], result: asyncio.Future[Any]
+) -> None:
+    """``handle``'s goal, just paused, is frozen: no feedback, and still active for its client."""
+    sent = len(feedback)
+    await robot.sleep(0)  # frozen at its next resumption point
+    assert handle.state is ActionState.PAUSED
+    await robot.sleep(1.5)  # longer than a step: a running count would send feedback
+    assert len(feedback) == sent
+    assert not result.done()
+
+
+@pytest.mark.asyncio
+async def test_a_paused_goal_stays_active_without_feedback_and_resumed_it_succeeds(
+    client: Client,
+) -> None:
+    async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
+        robot.ros2.serve_action("/count", Fibonacci, count)
+        await client.meet(robot)
+        feedback: list[list[int]] = []
+        goal = await client.send(3, feedback)
+        result = asyncio.ensure_future(client.result(goal))
+        await wait_for(lambda: len(feedback) == 1)
+        (handle,) = robot.handles()
+        handle.pause("operator")
+        await assert_paused(robot, handle, feedback, result)
+        handle.resume()
+        await wait_for(lambda: len(feedback) == 2)
+        robot.pause_all()
+        await assert_paused(robot, handle, feedback, result)
+        robot.resume_all()
+        response = await result
+        assert response.status == GoalStatus.STATUS_SUCCEEDED
+        assert list(response.result.sequence) == [0, 1, 2]  # the pauses unwound nothing
+        await wait_for(lambda: len(feedback) == 3)
+        assert feedback == [[0], [0, 1], [0, 1, 2]]
+
+
+@pytest.mark.asyncio
+async def test_an_emergency_stop_ends_a_running_goal_aborted_even_without_resources(
+    client: Client, caplog: pytest.LogCaptureFixture
+) -> None:
+    async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
+        robot.ros2.serve_action("/count", Fibonacci, count)  # it holds no resource
+        await client.meet(robot)
+        feedback: list[list[int]] = []
+        goal = await client.send(0, feedback)
+        await wait_for(lambda: len(feedback) > 1)  # it runs
+        (handle,) = robot.handles()
+        with caplog.at_level(logging.WARNING, "pyrobots_aio.ros2"):
+            stop = robot.emergency_stop("operator")
+            response = await client.result(goal)
+        assert response.status == GoalStatus.STATUS_ABORTED
+        assert list(response.result.sequence) == []  # an empty result
+        await stop
+        assert warnings_of(caplog) == [
+            f"action server /count: its action served /count#{handle.id} ended CANCELLED: "
+            f"action served /count#{handle.id} was cancelled by emergency_stop#{stop.id}: "
+            "emergency stop: operator"
+        ]
+
+
+@pytest.mark.asyncio
+async def test_a_refused_request_is_answered_success_false_with_the_reason(
+    client: Client, caplog: pytest.LogCaptureFixture
+) -> None:
+    @action
+    async def grip(robot: Robot, request: Any) -> SetBool.Response:
+        await robot.sleep(0.05 if not request.data else 600)
+        if not request.data:  # past its first step: the request was taken
+            msg = "the gripper is jammed"
+            raise RuntimeError(msg)
+        return SetBool.Response(success=True, message="closed")
+
+    async def call(data: bool) -> Any:
+        return await client.future(client.service.call_async(SetBool.Request(data=data)))
+
+    async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
+        robot.ros2.serve_service("/grip", SetBool, grip)
+        await client.meet(robot, "/grip")
+        with caplog.at_level(logging.WARNING, "pyrobots_aio.ros2"):
+            failed = await call(False)  # its action fails
+            running = asyncio.ensure_future(call(True))
+            await robot.wait(lambda r: bool(r.handles()), poll=0.01)
+            (handle,) = robot.handles()
+            stop = robot.emergency_stop("operator")  # ends the request running
+            stopped = await running
+            refused = await call(True)  # and refuses the next
+            await stop
+    ended = f"its action grip#{handle.id} ended"
+    assert [(r.success, r.message) for r in (failed, stopped, refused)] == [
+        (False, f"its action grip#{handle.id - 1} ended FAILED: the gripper is jammed"),
+        (
+            False,
+            f"{ended} CANCELLED: action grip#{handle.id} was cancelled by "
+            f"emergency_stop#{stop.id}: emergency stop: operator",
+        ),
+        (
+            False,
+            "the emergency stop is latched (operator); robot.clear_emergency_stop() lets "
+            "requests in again",
+        ),
+    ]
+    assert warnings_of(caplog) == [
+        f"service /grip: {failed.message}",
+        f"service /grip: {stopped.message}",
+        f"service /grip refused a request: {refused.message}",
+    ]
+
+
+@pytest.mark.asyncio
+async def test_a_refused_request_of_a_type_with_no_success_field_is_answered_empty(
+    client: Client, caplog: pytest.LogCaptureFixture
+) -> None:
+    async def never(robot: Robot, request: Any) -> None:
+        raise AssertionError  # never runs: the stop is latched
+
+    async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
+        robot.ros2.serve_service("/reset", Empty, never)
+        await client.meet(robot, "/reset")
+        await robot.emergency_stop("operator")
+        with caplog.at_level(logging.WARNING, "pyrobots_aio.ros2"):
+            call = client.services["/reset"].call_async(Empty.Request())
+            response = await client.future(call)
+    assert response == Empty.Response()  # all ROS 2 allows: its client cannot tell
+    assert warnings_of(caplog) == [
+        "service /reset refused a request: the emergency stop is latched (operator); "
+        "robot.clear_emergency_stop() lets requests in again"
+    ]
+
+
+@pytest.mark.asyncio
+async def test_a_goal_whose_action_returns_no_result_ends_aborted_said_once(
+    client: Client, caplog: pytest.LogCaptureFixture
+) -> None:
+    async def wrong(robot: Robot, goal: Any, feedback: Any) -> str:
+        return "done"
+
+    async with served(Robot()) as robot, asyncio.timeout(DEADLINE):
+        robot.ros2.serve_action("/count", Fibonacci, wrong)
+        await client.meet(robot)
+        with caplog.at_level(logging.WARNING, "pyrobots_aio.ros2"):
+            response = await client.result(await client.send(1))
+    assert response.status == GoalStatus.STATUS_ABORTED
+    assert warnings_of(caplog) == [
+        "action server /count: its action returned 'done', not a test_msgs/action/Fibonacci "
+        "result; the goal is aborted"
+    ]

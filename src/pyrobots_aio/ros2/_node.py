@@ -408,10 +408,15 @@ class Ros2Node:
         goal's result. Resources, priorities, pause and the emergency stop
         apply to it as to any action. A goal that cannot run (the emergency
         stop is latched, a ``wait=False`` resource is busy, the action fails at
-        its first step) is rejected, and the reason logged. A ROS 2 cancel
-        arrives in the action as ``ActionCancelled``: its cleanup runs, and the
-        goal ends CANCELED; cancelled by anything else, or failed, it ends
-        ABORTED (the reason logged).
+        its first step) is rejected: its client sees only that it was not
+        accepted (ROS 2's action protocol has no field for the reason), and
+        the reason is logged (a WARNING on the ``pyrobots_aio.ros2`` logger).
+        A ROS 2 cancel arrives in the action as ``ActionCancelled``: its
+        cleanup runs, and the goal ends CANCELED; cancelled by anything else,
+        or failed, it ends ABORTED with an empty result (the reason logged).
+        The emergency stop ends every goal running, holding resources or not
+        (ABORTED). A paused goal stays active for its client (no ROS 2 status
+        says paused) and sends no feedback until it resumes.
 
         Example:
             >>> async def count(robot, goal, feedback):  # doctest: +SKIP
@@ -427,9 +432,14 @@ class Ros2Node:
         """Serve the ROS 2 service ``name``: each request runs ``fn(robot, request)`` as an action.
 
         Its return value (a ``srv_type.Response``) is the response, sent once
-        the action is done. Services cannot refuse: a request whose action
-        cannot run, fails or is cancelled gets an empty response, and the
-        reason is logged.
+        the action is done. ROS 2 services cannot refuse a request: one whose
+        action cannot run (the emergency stop latched, a ``wait=False``
+        resource busy), fails or is cancelled (the emergency stop ends the
+        requests running) is answered ``success=False`` with the reason in
+        ``message`` where the response type has those fields (std_srvs'
+        Trigger and SetBool, and the many types like them), else with an
+        empty response, which its client cannot tell from a real one. The
+        reason is logged either way (a WARNING on ``pyrobots_aio.ros2``).
 
         Example:
             >>> async def reset(robot, request):  # doctest: +SKIP

@@ -2,24 +2,32 @@
 
 A goal is decided on the loop: the served function starts as an action at
 once, and the goal is accepted when that action got past its first step, or
-rejected, with the reason logged, when it could not run (the emergency stop
-is latched, a ``wait=False`` resource is busy, the robot refuses one more
-action). rclpy's goal callback, on the ROS thread, waits for that answer:
-one turn of the loop (bounded by `DECISION_BOUND`).
+rejected when it could not run (the emergency stop is latched, a
+``wait=False`` resource is busy, the robot refuses one more action).
+rclpy's goal callback, on the ROS thread, waits for that answer: one turn of
+the loop (bounded by `DECISION_BOUND`). ROS 2's action protocol has no field
+for a rejection's reason: the client sees ``accepted`` False and nothing
+more; the reason is logged (a WARNING on ``pyrobots_aio.ros2``).
 
-The goal then stays ``ACCEPTED`` while its action runs, and is executed
-(``EXECUTING``, then its final status) once the action is done: rclpy runs a
-pending coroutine callback again at every turn of its executor, so an
-execute callback that awaited the action would spin the ROS thread hot.
+The goal then stays ``ACCEPTED`` while its action runs (paused too: the
+protocol has no status for that; its feedback stops until it resumes), and is
+executed (``EXECUTING``, then its final status) once the action is done:
+rclpy runs a pending coroutine callback again at every turn of its executor,
+so an execute callback that awaited the action would spin the ROS thread hot.
 A ROS 2 cancel cancels the action (``ActionCancelled`` in its body); its
 cleanup runs, and the goal ends ``CANCELED``. An action cancelled by anyone
-else (a preemption, the emergency stop, the robot's exit) or failing ends
-``ABORTED``; the reason is logged.
+else (a preemption, the robot's exit, the emergency stop, which ends every
+served goal and request running, with or without resources) or failing ends
+``ABORTED``; the reason is logged, and the client gets an empty result.
 
 A service request waits for its action the same way, its response sent once
 the action is done (rclpy's service callback returns at once; the response
-it would send is deferred); a request whose action could not run or failed
-gets an empty response, and the reason is logged.
+it would send is deferred). ROS 2 services cannot refuse a request: one whose
+action could not run, failed or was cancelled is answered with a *refusal*
+(`refusal`): ``success`` False and the reason in ``message`` where the
+response type has those fields (std_srvs' Trigger and SetBool, and the many
+types that follow them), else an empty response, which its client cannot
+tell from a real one. The reason is logged either way.
 """
 
 from __future__ import annotations
@@ -65,12 +73,36 @@ def _as_action(fn: Callable[..., Any], name: str) -> Action[Any, Any, Any]:
     return served
 
 
-def _start(robot: Robot, act: Action[Any, Any, Any], *args: Any) -> ActionHandle[Any] | str:
-    """Start the action, or say why it cannot run."""
+def refusal(response_type: type, reason: str) -> Any:
+    """The response to a service request that was refused or whose action did not succeed.
+
+    ``success`` False and ``reason`` in ``message`` where ``response_type``
+    has a ``bool success`` (and a ``string message``), as std_srvs' Trigger
+    and SetBool do; otherwise an empty response (ROS 2 has no other way to
+    say no), which its client cannot tell from a real one.
+
+    Examples:
+        >>> from std_srvs.srv import SetBool  # doctest: +SKIP
+        >>> refusal(SetBool.Response, "the e-stop is latched (cliff)")  # doctest: +SKIP
+        std_srvs.srv.SetBool_Response(success=False, message='the e-stop is latched (cliff)')
+    """
+    response = response_type()
+    fields = response_type.get_fields_and_field_types()  # type: ignore[attr-defined]
+    if fields.get("success") == "boolean":
+        response.success = False
+        if fields.get("message") == "string":
+            response.message = reason
+    return response
+
+
+def _start(
+    robot: Robot, act: Action[Any, Any, Any], what: str, *args: Any
+) -> ActionHandle[Any] | str:
+    """Start the action, or say why it cannot run (``what``: goals or requests, for the fix)."""
     if robot.emergency_stopped:
         return (
             f"the emergency stop is latched ({robot.emergency_stop_reason}); "
-            "robot.clear_emergency_stop() lets goals in again"
+            f"robot.clear_emergency_stop() lets {what} in again"
         )
     try:
         return act(robot, *args)
@@ -107,6 +139,7 @@ class _Server:
     kind = "server"
     part = "Goal"  # what the interface's class has, as a generated action or service has
     example = "test_msgs.action.Fibonacci"
+    asks = "goals"
 
     def __init__(
         self, robot: Robot, thread: RosThread, name: str, interface: type, fn: Callable[..., Any]
@@ -117,12 +150,21 @@ class _Server:
         self.robot, self.thread, self.name, self.interface = robot, thread, name, interface
         self.action = _as_action(fn, name)
         self.handles: set[ActionHandle[Any]] = set()
+        robot.add_emergency_stop_callback(self._stopped)
+
+    def _stopped(self, _reason: str) -> set[ActionHandle[Any]]:
+        """The emergency stop ends every goal or request running, resources held or not."""
+        return set(self.handles)
+
+    def close(self) -> None:
+        """Stop serving (the running goals' actions are the robot's, and end with it)."""
+        self.robot.remove_emergency_stop_callback(self._stopped)
 
     def _begin(self, decision: concurrent.futures.Future[Any], *args: Any) -> None:
         """On the loop: start the action; answer ``decision`` after its first step."""
         if decision.cancelled():  # the ROS thread stopped waiting: refused already
             return
-        started = _start(self.robot, self.action, *args)
+        started = _start(self.robot, self.action, self.asks, *args)
         if isinstance(started, str):
             _answer(decision, started)
             return
@@ -154,17 +196,12 @@ class _Server:
             _log.warning("%s %s refused a request: %s", self.kind, self.name, answer)
         return answer
 
-    def _report(self, handle: ActionHandle[Any]) -> None:
-        if handle.outcome is not Outcome.SUCCEEDED:
-            _log.warning(
-                "%s %s: its action %s#%d ended %s: %s",
-                self.kind,
-                self.name,
-                handle.name,
-                handle.id,
-                handle.outcome.name,
-                handle.exception(),
-            )
+    def _report(self, handle: ActionHandle[Any]) -> str:
+        """Log (a WARNING) how ``handle``'s action ended, which was not a success; say it."""
+        ending = f"its action {handle.name}#{handle.id} ended {handle.outcome.name}: "
+        ending += str(handle.exception())
+        _log.warning("%s %s: %s", self.kind, self.name, ending)
+        return ending
 
 
 class Ros2ActionServer(_Server):
@@ -223,7 +260,8 @@ class Ros2ActionServer(_Server):
         if handle.outcome is Outcome.CANCELLED and goal_handle.status == _CANCELING:
             goal_handle.canceled()
         else:
-            self._report(handle)
+            if handle.outcome is not Outcome.SUCCEEDED:  # (a wrong result is logged already)
+                self._report(handle)
             goal_handle.abort()
         return self.action_type.Result()  # type: ignore[attr-defined]
 
@@ -247,6 +285,7 @@ class Ros2ActionServer(_Server):
 
     def close(self) -> None:
         """Stop serving (the goals' actions are the robot's, and end with it)."""
+        super().close()
         self._server.destroy()
 
     def __repr__(self) -> str:
@@ -297,6 +336,7 @@ class Ros2ServiceServer(_Server):
     kind = "service"
     part = "Request"
     example = "std_srvs.srv.SetBool"
+    asks = "requests"
 
     def __init__(self, *args: Any) -> None:
         super().__init__(*args)
@@ -310,7 +350,7 @@ class Ros2ServiceServer(_Server):
     def _on_request(self, request: Any, _response: Any) -> Any:
         answer = self._ask_loop(request)
         if isinstance(answer, str):
-            return self.srv_type.Response()  # type: ignore[attr-defined]
+            return refusal(self.srv_type.Response, answer)  # type: ignore[attr-defined]
         return _Reply(self, answer)
 
     def _on_send(self, response: Any, header: Any) -> None:
@@ -320,20 +360,20 @@ class Ros2ServiceServer(_Server):
             self._send(response, header)
 
     def response(self, handle: ActionHandle[Any]) -> Any:
-        """The response to send for ``handle``'s request (empty if it did not succeed)."""
+        """The response to send for ``handle``'s request (a `refusal` if it did not succeed)."""
         response_type = self.srv_type.Response  # type: ignore[attr-defined]
         if handle.outcome is Outcome.SUCCEEDED and isinstance(handle.result(), response_type):
             return handle.result()
-        if handle.outcome is Outcome.SUCCEEDED and handle.result() is not None:
-            _log.error(
-                "service %s: its action returned %r, not a %s response",
-                self.name,
-                handle.result(),
-                ros_name(self.srv_type),
+        if handle.outcome is Outcome.SUCCEEDED and handle.result() is None:
+            return response_type()  # an empty response, as asked
+        if handle.outcome is Outcome.SUCCEEDED:
+            reason = (
+                f"its action returned {handle.result()!r}, not a {ros_name(self.srv_type)} response"
             )
+            _log.error("service %s: %s", self.name, reason)
         else:
-            self._report(handle)
-        return response_type()
+            reason = self._report(handle)
+        return refusal(response_type, reason)
 
     def send(self, response: Any, header: Any) -> None:
         """Send ``response`` with the request's ``header`` (from any thread)."""
@@ -341,6 +381,7 @@ class Ros2ServiceServer(_Server):
 
     def close(self) -> None:
         """Stop serving."""
+        super().close()
         self.thread.node.destroy_service(self._service)
 
     def __repr__(self) -> str:
