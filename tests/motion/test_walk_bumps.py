@@ -9,6 +9,7 @@ suspending the motion it preempts, in virtual time, on every base.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Literal
 
 import pytest
@@ -35,6 +36,7 @@ BOUNDARIES: list[Boundary] = [
 
 
 REFLEXES = {"cancel": bumper_reflex.name, "suspend": suspending_reflex.name}
+REVERSE_SPEED = 0.05  # m/s: how fast the dock reverses onto it
 
 
 @pytest.mark.parametrize("side", ["left", "right", "both"])
@@ -82,7 +84,14 @@ async def test_a_bump_while_reversing_onto_the_dock_is_handled_and_it_docks(
         dock = robot.dock()
         while not log.of_kind(EventKind.ACTION_FINISHED, "navigate_to"):
             await robot.sleep(robot.control_period)
-        await robot.sleep(into_reverse)  # reversing at 5 cm/s, 0.28 m from the dock
+        # Reversing at 5 cm/s, 0.28 m from the dock: the bump comes once it has reversed that
+        # many seconds' worth (counted in metres, which a ROS 2 base's sim-node falling behind
+        # the robot's clock does not shift).
+        start = robot.odom_pose()[:2]
+        await robot.wait(
+            lambda r: math.dist(r.odom_pose()[:2], start) >= REVERSE_SPEED * into_reverse,
+            poll=robot.control_period,
+        )
         robot.state.update(bumper=True, bumper_left=True, bumper_right=False)
         if await dock.wait_done() is Outcome.CANCELLED:  # then the walk docks again
             for handle in robot.handles():
