@@ -17,7 +17,7 @@ Needs the ``ros2`` and ``sim`` extras (``pip install -e ".[sim,ros2]"``).
 Discovery stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``
 unless set); with a sim-node of its own, the script also draws a random
 ``ROS_DOMAIN_ID`` unless one is set, so it never drives anyone else's robot.
-Run: ``python examples/random_walk_ros2.py [--moves N] [--seed N]``
+Run: ``python examples/random_walk_ros2.py [--moves N] [--seed N] [--silence SECONDS]``
 """
 
 from __future__ import annotations
@@ -37,23 +37,29 @@ from pyrobots_aio.sim.random_walk import WalkReport, random_walk
 COMMAND = [sys.executable, "-m", "pyrobots_aio.cli", "sim-node"]  # pyrobots-aio sim-node
 
 
-async def main(namespace: str, moves: int, seed: int, rate: float) -> WalkReport:
+async def main(namespace: str, moves: int, seed: int, rate: float, silence: float) -> WalkReport:
     # odom_timeout is in the loop's (simulated) seconds: the default 0.5 s is a real base's
     # bound, an eighth of a wall-clock second at 4x, which a busy machine starves the
-    # sim-node (or this script) of. Half a wall-clock second at any rate instead; the
+    # sim-node (or this script) of. `silence` wall-clock seconds at any rate instead; the
     # sim-node's own command timeout still stops its wheels if this script goes quiet.
-    async with Ros2Robot(namespace=namespace, odom_timeout=0.5 * rate) as robot:
+    async with Ros2Robot(namespace=namespace, odom_timeout=silence * rate) as robot:
         return await random_walk(robot, moves=moves, seed=seed)
 
 
-def start_sim_node(namespace: str, rate: float) -> subprocess.Popen[str]:
+def start_sim_node(namespace: str, rate: float, silence: float) -> subprocess.Popen[str]:
     """``pyrobots-aio sim-node`` in a subprocess, once it says it is ready.
+
+    Its commands hold ``silence`` wall-clock seconds, as the robot waits for its odometry.
 
     Raises:
         SystemExit: The sim-node ended before it was ready (it said why, on standard error).
     """
     node = subprocess.Popen(
-        [*COMMAND, "--namespace", namespace, "--rate", str(rate)],
+        [
+            *COMMAND,
+            *("--namespace", namespace, "--rate", str(rate)),
+            *("--cmd-timeout", str(silence * rate)),
+        ],
         stdout=subprocess.PIPE,
         text=True,
     )
@@ -76,16 +82,30 @@ if __name__ == "__main__":
     )
     parser.add_argument("--moves", type=int, default=5, help="random moves made (default: 5)")
     parser.add_argument("--seed", type=int, default=0, help="seeds the moves (default: 0)")
+    parser.add_argument(
+        "--silence",
+        type=float,
+        default=0.5,
+        help="wall-clock seconds the script and its sim-node may go without a word from the "
+        "other before odometry counts as stale and the sim-node stops the wheels (default: 0.5; "
+        "more on a busy machine)",
+    )
     parser.add_argument("--external", action="store_true", help="drive a sim-node of your own")
     options = parser.parse_args()
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     if not options.external:  # the sim-node inherits it
         os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 101)))
     install_console_handler()
-    sim_node = None if options.external else start_sim_node(options.namespace, options.rate)
+    sim_node = (
+        None
+        if options.external
+        else start_sim_node(options.namespace, options.rate, options.silence)
+    )
     try:
         report = run_scaled(
-            main, options.namespace, options.moves, options.seed, options.rate, rate=options.rate
+            main,
+            *(options.namespace, options.moves, options.seed, options.rate, options.silence),
+            rate=options.rate,
         )
     except PyRobotsError as error:  # rclpy missing, a bad namespace: one line, no traceback
         raise SystemExit(f"random_walk_ros2.py: error: {error}") from None

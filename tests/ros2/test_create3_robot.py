@@ -10,7 +10,15 @@ import asyncio
 from typing import Literal
 
 import pytest
-from ros2_support import DEADLINE, require_interfaces, require_rclpy, require_sim, sim_node_process
+from ros2_support import (
+    DEADLINE,
+    PEER_SILENCE,
+    require_interfaces,
+    require_rclpy,
+    require_sim,
+    silence_options,
+    sim_node_process,
+)
 
 require_rclpy()
 require_sim()
@@ -26,7 +34,14 @@ from pyrobots_aio.testing import EventLog  # noqa: E402
 
 LOOP_RATE = 4.0
 TIMEOUT = DEADLINE * LOOP_RATE  # the loop's seconds: DEADLINE seconds of the wall clock
-NODE = ("--namespace", "/create3", "--profile", "create3", "--rate", str(LOOP_RATE))
+NODE = ("--namespace", "/create3", "--profile", "create3", *silence_options(LOOP_RATE))
+ODOM_TIMEOUT = PEER_SILENCE * LOOP_RATE
+"""The loop's seconds without odometry before it is stale: `PEER_SILENCE` of the wall clock.
+
+The walks are not about staleness, and a loaded machine holds either process up for longer
+than the default 0.5 s (an eighth of a wall-clock second at 4x); the sim-node holds each
+command as long (`silence_options`).
+"""
 
 pytestmark = pytest.mark.asyncio
 
@@ -38,9 +53,7 @@ async def test_a_create3_robot_reads_its_hazards_ir_and_dock_and_walks_unchanged
     with sim_node_process(*NODE):
         async with (
             asyncio.timeout(TIMEOUT),
-            # 2 simulated seconds of silence, half a second of the wall clock: a loaded
-            # machine holds a process up that long, and the walk is not about staleness.
-            Ros2Robot(namespace="/create3", profile="create3", odom_timeout=2.0) as robot,
+            Ros2Robot(namespace="/create3", profile="create3", odom_timeout=ODOM_TIMEOUT) as robot,
         ):
             assert robot.ros.topics == {
                 "cmd_vel": "cmd_vel",
@@ -83,7 +96,10 @@ async def test_a_docking_suspended_by_a_bump_stops_the_base_s_goal_and_sends_it_
         async with (
             asyncio.timeout(TIMEOUT),
             Ros2Robot(
-                namespace="/create3", profile="create3", odom_timeout=2.0, instruments=[log]
+                namespace="/create3",
+                profile="create3",
+                odom_timeout=ODOM_TIMEOUT,
+                instruments=[log],
             ) as robot,
         ):
             if motion == "dock":
