@@ -38,7 +38,9 @@ neither makes nor breaks a goal.
   both sides afresh. Both subscriptions keep ``FLOOD_DEPTH`` messages, so a
   burst longer than that queue shows the receiver's own sustained rate. A
   rate the sender itself cannot reach ends a search there
-  (``flood_publisher_limited``): that side absorbs at least that much.
+  (``flood_publisher_limited``): that side absorbs at least that much. A
+  message the sender's reliable publisher refuses (its history full of
+  messages the receiver has not acknowledged) counts as lost.
 
 Without rclpy the module prints why and returns nothing.
 """
@@ -65,7 +67,7 @@ if TYPE_CHECKING:
 
 KINDS = ("bridge", "plain")
 LATENCY_ROUNDS = 5  # rounds of the topic -> callback comparison, each in fresh processes
-LATENCY_N = 1_000  # messages per side and round
+LATENCY_N = 2_000  # messages per side and round
 WIRE_N = 2_000  # messages per side of publish -> wire, and commands of drive -> wire
 WIRE_ROUNDS = 5  # rounds (consecutive slices of the WIRE_N) of those two
 PERIOD = 0.004  # seconds between two latency messages on one topic: 250 Hz, a fast sensor
@@ -253,19 +255,28 @@ def _send_flood() -> None:
 
 
 def _burst(publisher: Any, message: Any, rate: float) -> dict[str, float]:
-    """Send ``rate`` messages/s for ``FLOOD_SECONDS``, paced to the millisecond."""
+    """Send ``rate`` messages/s for ``FLOOD_SECONDS``, paced to the millisecond.
+
+    A reliable publisher whose history is full of messages the receiver has
+    not acknowledged refuses one (after blocking a while): it counts as lost.
+    """
+    from rclpy.impl.implementation_singleton import rclpy_implementation
+
     count = round(rate * FLOOD_SECONDS)
     period = 1.0 / rate
-    publish = publisher.publish
+    publish, refused = publisher.publish, 0
     start = time.perf_counter()
     for n in range(count):
         ahead = start + n * period - time.perf_counter()
         if ahead > 0.001:
             time.sleep(ahead)
         message.data = n
-        publish(message)
+        try:
+            publish(message)
+        except rclpy_implementation.RCLError:  # "cannot publish data": the receiver is behind
+            refused += 1
     took = time.perf_counter() - start
-    return {"sent": count, "rate": (count - 1) / took if took else rate}
+    return {"sent": count, "refused": refused, "rate": (count - 1) / took if took else rate}
 
 
 def _plain_flood() -> None:
@@ -396,16 +407,21 @@ def _feed_odometry(node: object) -> None:
     node.create_timer(0.02, publish)  # type: ignore[attr-defined]
 
 
-def _start(mode: str) -> subprocess.Popen[str]:
-    process = subprocess.Popen(
-        [sys.executable, "-m", "tests.bench.bench_ros2", mode],
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    assert process.stdout is not None
-    assert process.stdout.readline().strip() == "ready"
-    return process
+def _start(*modes: str) -> list[subprocess.Popen[str]]:
+    """A helper process for each mode, started side by side; returned once all are ready."""
+    processes = [
+        subprocess.Popen(
+            [sys.executable, "-m", "tests.bench.bench_ros2", mode],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for mode in modes
+    ]
+    for process in processes:
+        assert process.stdout is not None
+        assert process.stdout.readline().strip() == "ready"
+    return processes
 
 
 def _send(process: subprocess.Popen[str], line: str) -> None:
@@ -464,8 +480,8 @@ def _compared(
 
 def _latency_round() -> dict[str, Any]:
     """One round in fresh processes: each side's latencies, and its CPU per message."""
-    receivers = {kind: _start(f"{kind}_latency") for kind in KINDS}
-    sender = _start("send_latency")
+    *started, sender = _start(*(f"{kind}_latency" for kind in KINDS), "send_latency")
+    receivers = dict(zip(KINDS, started, strict=True))
     try:
         for receiver in receivers.values():  # both measure their idle rate at once
             _send(receiver, "idle")
@@ -527,7 +543,7 @@ async def _publish_to_wire() -> dict[str, float]:
     from pyrobots_aio import Robot
     from pyrobots_aio.ros2 import attach_ros2
 
-    receiver = _start("receive_wire")
+    [receiver] = _start("receive_wire")
     plain = _Plain("bench_plain_pub")
     plain_pub = plain.node.create_publisher(Int64, "/bench/wire_plain", 1000)
     robot = Robot()
@@ -570,7 +586,7 @@ async def _drive_to_wire() -> dict[str, float]:
     from pyrobots_aio.motion import SENSORS
     from pyrobots_aio.ros2 import Ros2Robot
 
-    receiver = _start("receive_twists")
+    [receiver] = _start("receive_twists")
     plain = _Plain("bench_plain_twist")
     plain_pub = plain.node.create_publisher(Twist, "/bench/plain/cmd_vel", 1000)
     flags = [s for s in SENSORS if s.key in ("bumper", "bumper_left", "bumper_right", "docked")]
@@ -651,12 +667,14 @@ class _Flood:
     """The flood's three processes: a sender and each side's receiver."""
 
     def __init__(self) -> None:
-        self.receivers = {kind: _start(f"{kind}_flood") for kind in KINDS}
-        self.sender = _start("send_flood")
+        *receivers, self.sender = _start(*(f"{kind}_flood" for kind in KINDS), "send_flood")
+        self.receivers = dict(zip(KINDS, receivers, strict=True))
+        self.refused = dict.fromkeys(KINDS, 0)  # messages the sender's publisher refused
 
     def burst(self, kind: str, rate: float) -> tuple[float, int]:
         """One burst at ``rate`` to ``kind``: the rate achieved and the messages lost."""
         burst = json.loads(_tell(self.sender, f"{kind} {rate}"))
+        self.refused[kind] += burst["refused"]
         got = int(_tell(self.receivers[kind], str(burst["sent"])))
         return burst["rate"], max(0, burst["sent"] - got)
 
@@ -699,6 +717,8 @@ def _flood() -> dict[str, float]:
         "flood_publisher_limited": float(
             sum(s.publisher_limited for r in rounds for s in r.values())
         ),
+        "flood_refused_bridge": float(flood.refused["bridge"]),
+        "flood_refused_plain_rclpy": float(flood.refused["plain"]),
         "ros2_bridge_zero_loss_msgs_per_s": statistics.median(rates["bridge"]),
         "ros2_plain_rclpy_zero_loss_msgs_per_s": statistics.median(rates["plain"]),
         **_ratios(
