@@ -234,6 +234,7 @@ class _Event:
 
     def _rung(self) -> None:
         self._bell.rings()
+        info = None
         with contextlib.suppress(_implementation().InvalidHandle), self._handle:
             info = self._handle.take_event()
         if info is not None:
@@ -250,7 +251,7 @@ class LoopFeed:
     DDS keeps at most ``depth`` messages for the subscription (its history);
     the doorbell counts the messages that arrive, so those that arrived and
     were neither taken nor kept were dropped (overwritten, oldest first).
-    `queued` and ``dropped`` are read on the loop.
+    `queued` and `dropped` are read on the loop.
 
     Args:
         loop: The event loop, where everything here runs.
@@ -273,7 +274,7 @@ class LoopFeed:
         deliver: Callable[[Any], None],
         events: Mapping[Any, Callable[[Any], None]],
     ) -> None:
-        self.arrived = self.taken = self.dropped = 0
+        self.arrived = self.taken = self._dropped = 0
         self._loop, self._depth, self._deliver = loop, depth, deliver
         self._handle = subscription.handle
         self._msg_type, self._raw = subscription.msg_type, subscription.raw
@@ -293,16 +294,22 @@ class LoopFeed:
     @property
     def queued(self) -> int:
         """Messages DDS holds for the loop (arrived, not taken yet, not dropped)."""
-        self.look()
-        return max(0, self.arrived - self.taken - self.dropped)
+        self._look()
+        return max(0, self.arrived - self.taken - self._dropped)
 
-    def look(self) -> None:
+    @property
+    def dropped(self) -> int:
+        """Messages DDS dropped (overwrote) before the loop took them."""
+        self._look()
+        return self._dropped
+
+    def _look(self) -> None:
         """Count the arrivals rung for; those beyond what the history holds were dropped."""
         rang = 0 if self._bell is None or self._closed else self._bell.rings()
         if not rang:
             return
         self.arrived += rang
-        self.dropped += max(0, self.arrived - self.taken - self.dropped - self._depth)
+        self._dropped += max(0, self.arrived - self.taken - self._dropped - self._depth)
         if not self._pending:  # read here, the bell will not wake the loop for them
             self._pending = True
             self._loop.call_soon_threadsafe(self._take)
@@ -324,7 +331,7 @@ class LoopFeed:
                     return
                 taken = take(msg_type, raw)
                 if taken is None:  # all taken: every arrival counted is delivered or dropped
-                    self.dropped = max(self.dropped, self.arrived - self.taken)
+                    self._dropped = max(self._dropped, self.arrived - self.taken)
                     return
                 self.taken += 1
                 deliver(taken[0])

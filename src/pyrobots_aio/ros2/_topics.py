@@ -324,8 +324,6 @@ class Ros2Subscription(_Endpoint):
     @property
     def dropped(self) -> int:
         """Messages dropped because the event loop fell a whole queue behind."""
-        if isinstance(self._feed, LoopFeed):
-            self._feed.look()
         return self._feed.dropped
 
     async def wait_for_publishers(self, count: int = 1) -> int:
