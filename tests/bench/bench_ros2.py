@@ -6,12 +6,23 @@ the sender puts ``time.perf_counter_ns()`` (CLOCK_MONOTONIC, shared by every
 process here) in each message and the receiver's time is compared with that
 message's own stamp.
 
+Every comparison runs in rounds, the two sides interleaved within each round;
+a ratio is the median of the rounds' ratios, printed with the lowest and
+highest round (``*_lo``, ``*_hi``), so one unlucky round on a busy machine
+neither makes nor breaks a goal.
+
 - ``topic_to_callback_*``: a message from a sender process until a monitor
   callback runs on ``robot.state`` in a bridge process, beside a plain rclpy
   subscription callback in a process of its own (a message lost on the way
   is not counted: ``*_samples_*`` says how many came). The sender sends on both
   sides' topics at 250 Hz each, half a period apart, alternating which
-  goes first; each side has its process (and its GIL) to itself;
+  goes first; each side has its process (and its GIL) to itself. Each of
+  ``LATENCY_ROUNDS`` rounds starts the three processes afresh, and counts
+  as ``LATENCY_SLICES`` rounds of its consecutive messages: a process held
+  up for a while on a busy machine spoils the p99 of one slice, not more;
+- ``receive_cpu_*``: the CPU time (user and system, every thread) each of
+  those receiving processes spent per message, its idle rate taken off:
+  a cost the machine's load hardly changes, unlike the wall clock;
 - ``publish_to_wire_*``: ``node.publisher(...).publish`` (what
   ``drive()`` will use) until the message reaches another process, beside a
   plain rclpy publisher in the same process, alternately;
@@ -24,9 +35,14 @@ message's own stamp.
   zero loss (every message of a ``FLOOD_SECONDS`` burst counted into the
   state, or by a plain rclpy callback), sent at a paced rate by a process
   of its own; the rate doubles until a burst loses one, then is bisected;
-  the two sides' bursts alternate. Both subscriptions keep ``FLOOD_DEPTH``
-  messages, so a burst longer than that queue shows the receiver's own
-  sustained rate.
+  a burst that loses is sent again before its rate counts as lossy. The two
+  sides' bursts alternate, and each of ``FLOOD_ROUNDS`` rounds searches
+  both sides afresh. Both subscriptions keep ``FLOOD_DEPTH`` messages, so a
+  burst longer than that queue shows the receiver's own sustained rate. A
+  rate the sender itself cannot reach ends a search there
+  (``flood_publisher_limited``): that side absorbs at least that much. A
+  message the sender's reliable publisher refuses (its history full of
+  messages the receiver has not acknowledged) counts as lost.
 
 Without rclpy the module prints why and returns nothing.
 """
@@ -38,6 +54,7 @@ import importlib.util
 import json
 import os
 import random
+import resource
 import statistics
 import subprocess
 import sys
@@ -48,15 +65,21 @@ from typing import TYPE_CHECKING, Any
 from .bench_events import _p99, _stats
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Sequence
 
 KINDS = ("bridge", "plain")
-LATENCY_N = 1_500
+LATENCY_ROUNDS = 5  # rounds of the topic -> callback comparison, each in fresh processes
+LATENCY_N = 2_000  # messages per side and round
+LATENCY_SLICES = 2  # each round's ratios taken over this many consecutive slices of it
+WIRE_N = 2_000  # messages per side of publish -> wire, and commands of drive -> wire
+WIRE_ROUNDS = 5  # rounds (consecutive slices of the WIRE_N) of those two
 PERIOD = 0.004  # seconds between two latency messages on one topic: 250 Hz, a fast sensor
+IDLE_SECONDS = 1.0  # a receiver's idle CPU rate, measured before each round
+FLOOD_ROUNDS = 3  # searches of each side's zero-loss rate
 FLOOD_SECONDS = 2.0  # each burst: long enough that the queues cannot hide a slow receiver
 FLOOD_DEPTH = 1_000  # history depth of both sides' subscriptions (and of the sender)
 FLOOD_START = 2_000.0  # messages/s of the first burst
-FLOOD_ROUNDS = 8  # bursts per side at most
+FLOOD_BURSTS = 8  # rates tried per side and search at most
 FLOOD_RESOLUTION = 1.1  # the search stops once the lossy rate is within 10 % of the lossless
 
 
@@ -115,6 +138,48 @@ def _send_latency() -> None:
     plain.close()
 
 
+def _cpu_seconds() -> float:
+    """CPU time of this process so far, every thread, user and system."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+class _CpuMeter:
+    """A receiving process's CPU time over its measurement, its idle rate taken off.
+
+    Driven by the parent's lines: ``idle`` measures the idle rate (and
+    answers), ``mark`` starts the measurement, and the line that asks for the
+    results ends it (`spent`).
+    """
+
+    def __init__(self) -> None:
+        self.idle_rate = 0.0
+        self._cpu = self._wall = 0.0
+
+    def idle(self) -> None:
+        cpu, wall = _cpu_seconds(), time.perf_counter()
+        time.sleep(IDLE_SECONDS)
+        self.idle_rate = (_cpu_seconds() - cpu) / (time.perf_counter() - wall)
+        print("idle", flush=True)
+
+    def mark(self) -> None:
+        self._cpu, self._wall = _cpu_seconds(), time.perf_counter()
+
+    def spent(self) -> float:
+        """CPU seconds since `mark`, less what the process spends idle in as long."""
+        wall = time.perf_counter() - self._wall
+        return _cpu_seconds() - self._cpu - self.idle_rate * wall
+
+
+def _serve_meter(meter: _CpuMeter) -> None:
+    """Answer the parent's ``idle`` and ``mark`` lines until the one asking for results."""
+    while (line := sys.stdin.readline().strip()) in ("idle", "mark"):
+        if line == "idle":
+            meter.idle()
+        else:
+            meter.mark()
+
+
 def _plain_latency() -> None:
     """A plain rclpy subscription callback: its latency from each message's own stamp."""
     from std_msgs.msg import Int64
@@ -127,9 +192,10 @@ def _plain_latency() -> None:
         lambda m: samples.append(time.perf_counter_ns() - m.data),
         100,
     )
+    meter = _CpuMeter()
     print("ready", flush=True)
-    sys.stdin.readline()
-    print(json.dumps(samples), flush=True)
+    _serve_meter(meter)
+    print(json.dumps({"samples": samples, "cpu": meter.spent()}), flush=True)
     plain.close()
 
 
@@ -154,6 +220,7 @@ async def _bridge_latency_main() -> None:
     node = attach_ros2(robot, "bench_bridge_latency")
     stamps: list[int] = []
     ran: list[int] = []
+    meter = _CpuMeter()
     async with robot:
         node.subscribe(
             "/bench/latency_bridge",
@@ -166,8 +233,9 @@ async def _bridge_latency_main() -> None:
         monitor = robot.whenever("stamp", increase=1, max_firing_freq=0, blocking=False)
         monitor.do(lambda: ran.append(time.perf_counter_ns()))
         print("ready", flush=True)
-        await asyncio.to_thread(sys.stdin.readline)
-        print(json.dumps({"stamps": stamps, "ran": ran}), flush=True)
+        await asyncio.to_thread(_serve_meter, meter)
+        spent = meter.spent()
+        print(json.dumps({"stamps": stamps, "ran": ran, "cpu": spent}), flush=True)
 
 
 def _send_flood() -> None:
@@ -182,26 +250,36 @@ def _send_flood() -> None:
     print("ready", flush=True)
     for publisher in publishers.values():
         _wait_matched(publisher)
+    message = Int64()  # one message, its number changed: the sender's cost is the publish
     while line := sys.stdin.readline():
         kind, rate = line.split()
-        print(json.dumps(_burst(publishers[kind], float(rate))), flush=True)
+        print(json.dumps(_burst(publishers[kind], message, float(rate))), flush=True)
     plain.close()
 
 
-def _burst(publisher: Any, rate: float) -> dict[str, float]:
-    """Send ``rate`` messages/s for ``FLOOD_SECONDS``, paced to the millisecond."""
-    from std_msgs.msg import Int64
+def _burst(publisher: Any, message: Any, rate: float) -> dict[str, float]:
+    """Send ``rate`` messages/s for ``FLOOD_SECONDS``, paced to the millisecond.
+
+    A reliable publisher whose history is full of messages the receiver has
+    not acknowledged refuses one (after blocking a while): it counts as lost.
+    """
+    from rclpy.impl.implementation_singleton import rclpy_implementation
 
     count = round(rate * FLOOD_SECONDS)
     period = 1.0 / rate
+    publish, refused = publisher.publish, 0
     start = time.perf_counter()
     for n in range(count):
         ahead = start + n * period - time.perf_counter()
         if ahead > 0.001:
             time.sleep(ahead)
-        publisher.publish(Int64(data=n))
+        message.data = n
+        try:
+            publish(message)
+        except rclpy_implementation.RCLError:  # "cannot publish data": the receiver is behind
+            refused += 1
     took = time.perf_counter() - start
-    return {"sent": count, "rate": (count - 1) / took if took else rate}
+    return {"sent": count, "refused": refused, "rate": (count - 1) / took if took else rate}
 
 
 def _plain_flood() -> None:
@@ -332,33 +410,88 @@ def _feed_odometry(node: object) -> None:
     node.create_timer(0.02, publish)  # type: ignore[attr-defined]
 
 
-def _start(mode: str) -> subprocess.Popen[str]:
-    process = subprocess.Popen(
-        [sys.executable, "-m", "tests.bench.bench_ros2", mode],
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    assert process.stdout is not None
-    assert process.stdout.readline().strip() == "ready"
-    return process
+def _start(*modes: str) -> list[subprocess.Popen[str]]:
+    """A helper process for each mode, started side by side; returned once all are ready."""
+    processes = [
+        subprocess.Popen(
+            [sys.executable, "-m", "tests.bench.bench_ros2", mode],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for mode in modes
+    ]
+    for process in processes:
+        assert process.stdout is not None
+        assert process.stdout.readline().strip() == "ready"
+    return processes
+
+
+def _send(process: subprocess.Popen[str], line: str) -> None:
+    assert process.stdin is not None
+    process.stdin.write(line + "\n")
+    process.stdin.flush()
 
 
 def _tell(process: subprocess.Popen[str], line: str) -> str:
-    assert process.stdin is not None
+    """Send ``line``; return the process's answer."""
+    _send(process, line)
     assert process.stdout is not None
-    process.stdin.write(line + "\n")
-    process.stdin.flush()
     return process.stdout.readline()
+
+
+# -- rounds --------------------------------------------------------------------------
+
+
+def _ratios(name: str, ratios: Sequence[float]) -> dict[str, float]:
+    """The median of per-round ratios under ``name``, with the lowest and highest round."""
+    return {
+        name: statistics.median(ratios),
+        f"{name}_lo": min(ratios),
+        f"{name}_hi": max(ratios),
+    }
+
+
+def _slices(samples: Sequence[float], rounds: int) -> list[Sequence[float]]:
+    """``samples`` cut into ``rounds`` consecutive slices of (nearly) equal length."""
+    size = len(samples) / rounds
+    return [samples[round(i * size) : round((i + 1) * size)] for i in range(rounds)]
+
+
+def _in_rounds(
+    bridge: Sequence[float], plain: Sequence[float], rounds: int = WIRE_ROUNDS
+) -> list[tuple[Sequence[float], Sequence[float]]]:
+    """Both sides' samples (in the order sent) cut into ``rounds`` rounds."""
+    return list(zip(_slices(bridge, rounds), _slices(plain, rounds), strict=True))
+
+
+def _compared(
+    name: str, rounds: Sequence[tuple[Sequence[float], Sequence[float]]]
+) -> dict[str, float]:
+    """Per-round median and p99 ratios (bridge over plain rclpy) of latency samples."""
+    return {
+        **_ratios(
+            f"ros2_{name}_median_ratio",
+            [statistics.median(b) / statistics.median(p) for b, p in rounds],
+        ),
+        **_ratios(f"ros2_{name}_p99_ratio", [_p99(list(b)) / _p99(list(p)) for b, p in rounds]),
+    }
 
 
 # -- topic -> state -> monitor callback --------------------------------------------------
 
 
-def _topic_to_callback() -> dict[str, float]:
-    receivers = {kind: _start(f"{kind}_latency") for kind in KINDS}
-    sender = _start("send_latency")
+def _latency_round() -> dict[str, Any]:
+    """One round in fresh processes: each side's latencies, and its CPU per message."""
+    *started, sender = _start(*(f"{kind}_latency" for kind in KINDS), "send_latency")
+    receivers = dict(zip(KINDS, started, strict=True))
     try:
+        for receiver in receivers.values():  # both measure their idle rate at once
+            _send(receiver, "idle")
+        for receiver in receivers.values():
+            assert receiver.stdout is not None
+            assert receiver.stdout.readline().strip() == "idle"
+            _send(receiver, "mark")
         assert _tell(sender, "go").strip() == "done"
         time.sleep(0.5)  # the last messages on their way
         got = {kind: json.loads(_tell(receiver, "")) for kind, receiver in receivers.items()}
@@ -373,15 +506,37 @@ def _topic_to_callback() -> dict[str, float]:
         )
         raise RuntimeError(msg)
     bridge = [end - stamp for end, stamp in zip(ran, stamps, strict=True)]
-    plain = got["plain"]
+    plain = got["plain"]["samples"]
+    return {
+        "bridge": bridge,
+        "plain": plain,
+        "cpu_bridge": got["bridge"]["cpu"] / max(1, len(bridge)),
+        "cpu_plain": got["plain"]["cpu"] / max(1, len(plain)),
+    }
+
+
+def _topic_to_callback() -> dict[str, float]:
+    rounds = [_latency_round() for _ in range(LATENCY_ROUNDS)]
+    bridge = [s for r in rounds for s in r["bridge"]]
+    plain = [s for r in rounds for s in r["plain"]]
+    cpu = {kind: [r[f"cpu_{kind}"] * 1e6 for r in rounds] for kind in KINDS}
     return {
         **_stats("topic_to_callback_bridge", bridge),
         **_stats("topic_to_callback_plain_rclpy", plain),
         "topic_to_callback_samples_bridge": float(len(bridge)),
         "topic_to_callback_samples_plain_rclpy": float(len(plain)),
-        "topic_to_callback_sent_each": float(LATENCY_N),
-        "ros2_topic_to_callback_median_ratio": statistics.median(bridge) / statistics.median(plain),
-        "ros2_topic_to_callback_p99_ratio": _p99(bridge) / _p99(plain),
+        "topic_to_callback_sent_each": float(LATENCY_N * LATENCY_ROUNDS),
+        "topic_to_callback_rounds": float(LATENCY_ROUNDS * LATENCY_SLICES),
+        **_compared(
+            "topic_to_callback",
+            [pair for r in rounds for pair in _in_rounds(r["bridge"], r["plain"], LATENCY_SLICES)],
+        ),
+        "receive_cpu_bridge_us_per_msg": statistics.median(cpu["bridge"]),
+        "receive_cpu_plain_rclpy_us_per_msg": statistics.median(cpu["plain"]),
+        **_ratios(
+            "ros2_receive_cpu_ratio",
+            [b / p for b, p in zip(cpu["bridge"], cpu["plain"], strict=True)],
+        ),
     }
 
 
@@ -394,7 +549,7 @@ async def _publish_to_wire() -> dict[str, float]:
     from pyrobots_aio import Robot
     from pyrobots_aio.ros2 import attach_ros2
 
-    receiver = _start("receive_wire")
+    [receiver] = _start("receive_wire")
     plain = _Plain("bench_plain_pub")
     plain_pub = plain.node.create_publisher(Int64, "/bench/wire_plain", 1000)
     robot = Robot()
@@ -408,7 +563,7 @@ async def _publish_to_wire() -> dict[str, float]:
                 await asyncio.sleep(0.01)
             await asyncio.sleep(0.5)  # matched from the receiver's side too
             pairs = [("bridge", bridge_pub.publish), ("plain", plain_pub.publish)]
-            for n in range(LATENCY_N):
+            for n in range(WIRE_N):
                 for kind, publish in pairs if n % 2 else pairs[::-1]:
                     start = time.perf_counter_ns()
                     publish(Int64(data=start))
@@ -424,7 +579,7 @@ async def _publish_to_wire() -> dict[str, float]:
         **_stats("publish_to_wire_plain_rclpy", got["plain"]),
         "publish_call_bridge_median_us": statistics.median(calls["bridge"]) / 1e3,
         "publish_call_plain_rclpy_median_us": statistics.median(calls["plain"]) / 1e3,
-        "ros2_publish_to_wire_p99_ratio": _p99(got["bridge"]) / _p99(got["plain"]),
+        **_compared("publish_to_wire", _in_rounds(got["bridge"], got["plain"])),
     }
 
 
@@ -437,7 +592,7 @@ async def _drive_to_wire() -> dict[str, float]:
     from pyrobots_aio.motion import SENSORS
     from pyrobots_aio.ros2 import Ros2Robot
 
-    receiver = _start("receive_twists")
+    [receiver] = _start("receive_twists")
     plain = _Plain("bench_plain_twist")
     plain_pub = plain.node.create_publisher(Twist, "/bench/plain/cmd_vel", 1000)
     flags = [s for s in SENSORS if s.key in ("bumper", "bumper_left", "bumper_right", "docked")]
@@ -460,7 +615,7 @@ async def _drive_to_wire() -> dict[str, float]:
                 robot.drive(v, 0.0)
 
             drives = [("bridge", bridge_drive), ("plain", plain_drive)]
-            for n in range(1, LATENCY_N + 1):  # each command's speed, n, tells it apart
+            for n in range(1, WIRE_N + 1):  # each command's speed, n, tells it apart
                 for kind, drive in drives if n % 2 else drives[::-1]:
                     sent[kind][n] = time.perf_counter_ns()
                     drive(float(n))
@@ -471,14 +626,14 @@ async def _drive_to_wire() -> dict[str, float]:
     finally:
         receiver.wait()
         plain.close()
-    latency = {
-        kind: [arrived - sent[kind][int(float(v))] for v, arrived in got[kind].items()]
-        for kind in sent
+    arrivals = {kind: {int(float(v)): t for v, t in got[kind].items()} for kind in sent}
+    latency = {  # in the order sent: the rounds are consecutive slices of the commands
+        kind: [arrivals[kind][n] - sent[kind][n] for n in sorted(arrivals[kind])] for kind in sent
     }
     return {
         **_stats("drive_to_wire_bridge", latency["bridge"]),
         **_stats("drive_to_wire_plain_rclpy", latency["plain"]),
-        "ros2_drive_to_wire_p99_ratio": _p99(latency["bridge"]) / _p99(latency["plain"]),
+        **_compared("drive_to_wire", _in_rounds(latency["bridge"], latency["plain"])),
     }
 
 
@@ -492,10 +647,11 @@ class _Search:
         self.lossless = 0.0  # the highest rate achieved without loss
         self.lossy = float("inf")  # the lowest rate achieved with a loss
         self.publisher_limited = False
+        self.bursts = 0
 
     @property
     def done(self) -> bool:
-        return self.lossy <= self.lossless * FLOOD_RESOLUTION
+        return self.lossy <= self.lossless * FLOOD_RESOLUTION or self.bursts >= FLOOD_BURSTS
 
     def next_rate(self) -> float:
         if self.lossy == float("inf"):
@@ -503,6 +659,7 @@ class _Search:
         return (self.lossless * self.lossy) ** 0.5 if self.lossless else self.lossy / 2
 
     def record(self, wanted: float, achieved: float, lost: int) -> None:
+        self.bursts += 1
         if lost:
             self.lossy = min(self.lossy, achieved)
             return
@@ -512,40 +669,68 @@ class _Search:
             self.lossy = self.lossless
 
 
-def _flood() -> dict[str, float]:
-    receivers = {kind: _start(f"{kind}_flood") for kind in KINDS}
-    sender = _start("send_flood")
-    searches = {kind: _Search() for kind in KINDS}
-    trials = dict.fromkeys(KINDS, 0.0)
-    order = list(KINDS)
-    try:
-        for _ in range(FLOOD_ROUNDS):
-            order.reverse()  # neither side always first
-            for kind in order:
-                search = searches[kind]
-                if search.done:
-                    continue
-                wanted = search.next_rate()
-                burst = json.loads(_tell(sender, f"{kind} {wanted}"))
-                got = int(_tell(receivers[kind], str(burst["sent"])))
-                search.record(wanted, burst["rate"], max(0, burst["sent"] - got))
-                trials[kind] += 1
-    finally:
-        for process in (sender, *receivers.values()):
+class _Flood:
+    """The flood's three processes: a sender and each side's receiver."""
+
+    def __init__(self) -> None:
+        *receivers, self.sender = _start(*(f"{kind}_flood" for kind in KINDS), "send_flood")
+        self.receivers = dict(zip(KINDS, receivers, strict=True))
+        self.refused = dict.fromkeys(KINDS, 0)  # messages the sender's publisher refused
+
+    def burst(self, kind: str, rate: float) -> tuple[float, int]:
+        """One burst at ``rate`` to ``kind``: the rate achieved and the messages lost."""
+        burst = json.loads(_tell(self.sender, f"{kind} {rate}"))
+        self.refused[kind] += burst["refused"]
+        got = int(_tell(self.receivers[kind], str(burst["sent"])))
+        return burst["rate"], max(0, burst["sent"] - got)
+
+    def trial(self, kind: str, search: _Search) -> None:
+        """The search's next rate; a burst that loses is sent again before it counts."""
+        wanted = search.next_rate()
+        achieved, lost = self.burst(kind, wanted)
+        if lost:
+            achieved, lost = self.burst(kind, wanted)
+        search.record(wanted, achieved, lost)
+
+    def close(self) -> None:
+        for process in (self.sender, *self.receivers.values()):
             assert process.stdin is not None
             process.stdin.close()
             process.wait()
-    bridge, plain = searches["bridge"], searches["plain"]
+
+
+def _flood() -> dict[str, float]:
+    flood = _Flood()
+    rounds: list[dict[str, _Search]] = []
+    order = list(KINDS)
+    try:
+        for _ in range(FLOOD_ROUNDS):
+            searches = {kind: _Search() for kind in KINDS}
+            while not all(search.done for search in searches.values()):
+                order.reverse()  # neither side always first
+                for kind in order:
+                    if not searches[kind].done:
+                        flood.trial(kind, searches[kind])
+            rounds.append(searches)
+    finally:
+        flood.close()
+    rates = {kind: [r[kind].lossless for r in rounds] for kind in KINDS}
     return {
-        "flood_seconds_per_trial": FLOOD_SECONDS,
-        "flood_trials_bridge": trials["bridge"],
-        "flood_trials_plain_rclpy": trials["plain"],
-        "flood_lossy_bridge_msgs_per_s": bridge.lossy if bridge.lossy < float("inf") else 0.0,
-        "flood_lossy_plain_rclpy_msgs_per_s": plain.lossy if plain.lossy < float("inf") else 0.0,
-        "flood_publisher_limited": float(bridge.publisher_limited or plain.publisher_limited),
-        "ros2_bridge_zero_loss_msgs_per_s": bridge.lossless,
-        "ros2_plain_rclpy_zero_loss_msgs_per_s": plain.lossless,
-        "ros2_zero_loss_rate_ratio": bridge.lossless / plain.lossless if plain.lossless else 0.0,
+        "flood_seconds_per_burst": FLOOD_SECONDS,
+        "flood_rounds": float(FLOOD_ROUNDS),
+        "flood_bursts_bridge": float(sum(r["bridge"].bursts for r in rounds)),
+        "flood_bursts_plain_rclpy": float(sum(r["plain"].bursts for r in rounds)),
+        "flood_publisher_limited": float(
+            sum(s.publisher_limited for r in rounds for s in r.values())
+        ),
+        "flood_refused_bridge": float(flood.refused["bridge"]),
+        "flood_refused_plain_rclpy": float(flood.refused["plain"]),
+        "ros2_bridge_zero_loss_msgs_per_s": statistics.median(rates["bridge"]),
+        "ros2_plain_rclpy_zero_loss_msgs_per_s": statistics.median(rates["plain"]),
+        **_ratios(
+            "ros2_zero_loss_rate_ratio",
+            [b / p if p else 0.0 for b, p in zip(rates["bridge"], rates["plain"], strict=True)],
+        ),
     }
 
 

@@ -1,4 +1,8 @@
-"""Topics into the state and out of publishers, against plain rclpy nodes written here."""
+"""Topics into the state and out of publishers, against plain rclpy nodes written here.
+
+The tests marked ``feed`` run twice: with the subscription rung on the loop by
+DDS itself (where this system allows it) and with the receiver thread's feed.
+"""
 
 from __future__ import annotations
 
@@ -21,12 +25,23 @@ from sensor_msgs.msg import Range  # noqa: E402
 
 from pyrobots_aio import Robot  # noqa: E402
 from pyrobots_aio.ros2 import attach_ros2  # noqa: E402
+from pyrobots_aio.ros2._doorbell import doorbells_available  # noqa: E402
 from pyrobots_aio.ros2._rclpy import qos_profile  # noqa: E402
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
     from ros2_support import PlainNode
+
+
+@pytest.fixture(params=["loop", "thread"])
+def feed(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """How the subscriptions' messages reach the loop: rung by DDS, or a receiver thread."""
+    if request.param == "thread":
+        monkeypatch.setattr("pyrobots_aio.ros2._receiver.doorbells_available", lambda: False)
+    elif not doorbells_available():
+        pytest.skip("no eventfd doorbell on this system (Linux on x86-64 or AArch64 has one)")
+    return str(request.param)
 
 
 def twist(v: float, w: float) -> Any:
@@ -37,7 +52,7 @@ def twist(v: float, w: float) -> Any:
 
 @pytest.mark.asyncio
 async def test_a_plain_twist_publisher_feeds_the_state_and_a_monitor(
-    plain: Callable[..., PlainNode],
+    plain: Callable[..., PlainNode], feed: str
 ) -> None:
     teleop = plain("teleop")
     robot = Robot()
@@ -57,7 +72,9 @@ async def test_a_plain_twist_publisher_feeds_the_state_and_a_monitor(
         assert sub.received == 2
         assert sub.topic == "/teleop"
         assert sub.keys == {"v", "w"}
-        assert sub.publishers == 1
+        assert sub.publishers == 1  # the matched count: rung, or waited on by the receiver
+        receivers = [t for t in threading.enumerate() if t.name.endswith(" receiver")]
+        assert len(receivers) == (feed == "thread")  # rung: no thread between DDS and the loop
 
 
 @pytest.mark.asyncio
@@ -82,6 +99,7 @@ async def test_to_state_as_a_function_and_as_a_key(plain: Callable[..., PlainNod
 
 
 @pytest.mark.asyncio
+@pytest.mark.usefixtures("feed")
 async def test_a_callback_runs_on_the_loop_with_each_message(
     plain: Callable[..., PlainNode],
 ) -> None:
@@ -129,6 +147,7 @@ async def test_a_publisher_reaches_a_plain_odometry_listener(
 
 
 @pytest.mark.asyncio
+@pytest.mark.usefixtures("feed")
 async def test_sensor_data_is_best_effort_both_ways(plain: Callable[..., PlainNode]) -> None:
     sensor = plain("ir_driver")
     listener = plain("ir_listener")
@@ -158,6 +177,7 @@ async def test_sensor_data_is_best_effort_both_ways(plain: Callable[..., PlainNo
 
 
 @pytest.mark.asyncio
+@pytest.mark.usefixtures("feed")
 async def test_a_lagging_loop_drops_the_oldest_messages_as_keep_last_does(
     plain: Callable[..., PlainNode],
 ) -> None:
@@ -181,6 +201,7 @@ async def test_a_lagging_loop_drops_the_oldest_messages_as_keep_last_does(
 
 
 @pytest.mark.asyncio
+@pytest.mark.usefixtures("feed")
 async def test_topics_reach_the_state_while_rclpys_executor_is_busy(
     plain: Callable[..., PlainNode],
 ) -> None:
@@ -214,6 +235,7 @@ async def test_topics_reach_the_state_while_rclpys_executor_is_busy(
 
 
 @pytest.mark.asyncio
+@pytest.mark.usefixtures("feed")
 async def test_subscriptions_closed_under_a_flood_leave_the_receiver_quiet(
     plain: Callable[..., PlainNode], caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -1,12 +1,12 @@
 """Topics: subscriptions that write ``robot.state``, and publishers.
 
-A message reaches the loop without polling: the node's receiver (its own
-thread, see `_receiver`) takes what DDS holds for the subscription, puts the
-batch in the subscription's inbox and, if the inbox was empty, schedules one
-drain with ``call_soon_threadsafe``; the drain writes every queued message
-to the state, in order, each as one batch. The inbox holds at most the QoS
-history depth: if the loop falls that far behind, the oldest messages are
-dropped (and counted), as a ROS 2 ``KEEP_LAST`` queue would.
+A message reaches the loop without polling: DDS rings the subscription's
+doorbell and the loop takes the message itself, or, where that cannot be
+done, the node's receiver thread takes it and hands it over (see
+`_receiver`). Each message is written to the state as one batch, in order.
+At most the QoS history depth waits for the loop: if the loop falls that far
+behind, the oldest messages are dropped (and counted), as a ROS 2
+``KEEP_LAST`` queue would.
 """
 
 from __future__ import annotations
@@ -15,13 +15,13 @@ import asyncio
 import inspect
 import logging
 import operator
-import threading
-from collections import deque
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from .._exceptions import QosMismatchError, Ros2Error, TopicTypeError
+from ._doorbell import DoorbellUnavailable
 from ._rclpy import rclpy_module, ros_name
+from ._receiver import LoopFeed, ThreadFeed, taken_elsewhere
 
 if TYPE_CHECKING:
     from ..robot import Robot
@@ -269,25 +269,47 @@ class Ros2Subscription(_Endpoint):
         qos: Any,
     ) -> None:
         super().__init__(thread, topic, msg_type, qos)
-        self.received = self.dropped = 0
+        self.received = 0
         self.keys: set[str] = set()
         self._robot = robot
         self._mapping, self._callback = mapping, callback
-        self._depth = max(1, qos.depth)
-        self._inbox: deque[Any] = deque(maxlen=self._depth)
-        self._lock = threading.Lock()
-        self._scheduled = False
         self._next: list[asyncio.Future[Any]] = []
-        receiver = thread.receiver
-        self._sub = thread.node.create_subscription(
-            msg_type,
-            topic,
-            self._on_message,
-            qos,
+        self._sub, self._feed = self._subscribe(max(1, qos.depth))
+
+    def _subscribe(self, depth: int) -> tuple[Any, LoopFeed | ThreadFeed]:
+        """The rclpy subscription, and its feed: rung on the loop if it can, else a thread's."""
+        thread, receiver = self._thread, self._thread.receiver
+        node, events = thread.node, rclpy_module("rclpy.event_handler")
+        if receiver.doorbells:
+            kinds = events.QoSSubscriptionEventType
+            quiet = events.SubscriptionEventCallbacks(use_default_callbacks=False)
+            sub = node.create_subscription(
+                self.msg_type,
+                self.topic,
+                taken_elsewhere,
+                self.qos,
+                event_callbacks=quiet,
+                callback_group=receiver.group,
+            )
+            rung = {
+                kinds.RCL_SUBSCRIPTION_MATCHED: self._on_matched,
+                kinds.RCL_SUBSCRIPTION_REQUESTED_INCOMPATIBLE_QOS: self._on_incompatible,
+            }
+            try:
+                return sub, LoopFeed(thread.loop, sub, depth, self._deliver, rung)
+            except DoorbellUnavailable as why:
+                _log.info("ROS 2 messages reach the loop through a thread: %s", why)
+                receiver.doorbells = False
+                node.destroy_subscription(sub)
+        sub = node.create_subscription(
+            self.msg_type,
+            self.topic,
+            taken_elsewhere,
+            self.qos,
             event_callbacks=self._events("SubscriptionEventCallbacks"),
             callback_group=receiver.group,
         )
-        receiver.add(self._sub, self._on_messages, self._depth)
+        return sub, ThreadFeed(receiver, sub, depth, thread.to_loop, self._deliver)
 
     @property
     def publishers(self) -> int:
@@ -297,8 +319,12 @@ class Ros2Subscription(_Endpoint):
     @property
     def queued(self) -> int:
         """Messages received from DDS and not yet delivered on the loop (the loop's lag)."""
-        with self._lock:
-            return len(self._inbox)
+        return self._feed.queued
+
+    @property
+    def dropped(self) -> int:
+        """Messages dropped because the event loop fell a whole queue behind."""
+        return self._feed.dropped
 
     async def wait_for_publishers(self, count: int = 1) -> int:
         """Return once at least ``count`` publishers are matched (wrap it in a timeout).
@@ -328,9 +354,8 @@ class Ros2Subscription(_Endpoint):
 
     def close(self) -> None:
         """Stop receiving; messages already queued are dropped."""
-        receiver = self._thread.receiver
-        if receiver is not None and not self._closed:
-            receiver.remove(self._sub)
+        if not self._closed:
+            self._feed.close()
         error = self._close("destroy_subscription", self._sub, "subscription to")
         if error is not None:
             self._fail_waiters(error)
@@ -341,36 +366,10 @@ class Ros2Subscription(_Endpoint):
             if not future.done():
                 future.set_exception(error)
 
-    # -- on the receiver's thread -----------------------------------------------------
-
-    def _on_message(self, message: Any) -> None:
-        """Deliver one message (rclpy's callback; the receiver takes the messages instead)."""
-        self._on_messages([message])
-
-    def _on_messages(self, messages: list[Any]) -> None:
-        with self._lock:
-            # the inbox keeps the newest `depth` messages: count those it is about to drop
-            self.dropped += max(0, len(self._inbox) + len(messages) - self._depth)
-            self._inbox.extend(messages)
-            if self._scheduled:
-                return
-            self._scheduled = True
-        self._thread.to_loop(self._drain)
-
     # -- on the loop ----------------------------------------------------------------
 
-    def _drain(self) -> None:
-        with self._lock:
-            messages = list(self._inbox)
-            self._inbox.clear()
-            self._scheduled = False
-        for message in messages:
-            if self._closed:
-                return
-            self.received += 1
-            self._deliver(message)
-
     def _deliver(self, message: Any) -> None:
+        self.received += 1
         try:
             if self._mapping is not None:
                 values = self._mapping(message)
