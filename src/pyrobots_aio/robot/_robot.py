@@ -421,8 +421,10 @@ class Robot(StateMethods, EmergencyStop):
         Up to ``min(32, os.cpu_count() + 4)`` calls (as many as asyncio's
         default executor runs) run at once for callers that still wait; further
         callers wait their turn. An abandoned call gives its turn up at once
-        and runs on beside them, so a later call never waits behind it; but
-        while 32 abandoned calls still run, a call is refused with
+        and runs on beside them, so a later call never waits behind it. Never
+        more than 32 abandoned calls run: as any running call may yet be
+        abandoned, fewer run at once as abandoned ones fill that room (one at
+        a time beside 31), and while 32 run, a call is refused with
         `TooManyAbandonedCalls`, which counts them. The robot's exit waits for
         no call: it logs a WARNING naming the abandoned calls still running;
         each of their threads ends when its call returns, and no thread is left
