@@ -282,34 +282,76 @@ async def test_time_the_loop_waits_for_a_cpu_is_not_a_block(
 
 
 STOPPED = """
-import asyncio, logging, sys, time
+import asyncio, logging, os, signal, sys, threading, time
 from pyrobots_aio._core import _blockwatch
 from pyrobots_aio._core._blockwatch import BlockWatch
 from pyrobots_aio._core._instrument import Instruments
 from pyrobots_aio._core._logging import LogScope
 
 logging.basicConfig(format="%(levelname)s %(message)s")
-if sys.argv[1] == "polling":
+POLLING = sys.argv[1] == "polling"
+if POLLING:
     def no_timers(*, blocking=True):
         raise OSError("no timerfd here")
     _blockwatch.Timer = no_timers
+
+
+def spin(seconds, until=lambda: False):
+    # Busy for ``seconds`` of this thread's CPU time (or until ``until()``): never a block.
+    end = time.thread_time() + seconds
+    while time.thread_time() < end and not until():
+        pass
+    return until()
+
+
+def awaiting_the_answer(thread):
+    # Whether the watchdog's thread waits for the loop's answer to its probe (in the kernel).
+    frame, names = sys._current_frames().get(thread.ident), []
+    while frame is not None:
+        names.append(frame.f_code.co_name)
+        frame = frame.f_back
+    return names[:1] == ["wait"] and "_wait_while_scheduled" in names
 
 
 async def main():
     loop = asyncio.get_running_loop()
     done = asyncio.Event()
     loop.add_reader(sys.stdin.fileno(), done.set)
-    # 0.3 s: still half the stop, and more than a loaded virtual machine's stolen time.
+    # 0.3 s: half the stop, and more than a loaded virtual machine's stolen time.
     watch = BlockWatch(loop, 0.3, LogScope().logger("pyrobots_aio.watchdog"), Instruments())
+    probed, post = threading.Event(), watch._post
+
+    def posting(probe, answer):
+        posted = post(probe, answer)
+        probed.set()
+        return posted
+
+    watch._post = posting
     watch.start()
     print("busy", flush=True)
-    while not done.is_set():
-        # Busy callbacks of 5 ms of CPU time each, never a block: stopped in the middle of
-        # one, the loop thread finishes it when the process goes on, then turns.
-        end = time.thread_time() + 0.005
-        while time.thread_time() < end:
-            pass
+    for _ in range(3):
+        # Busy callbacks of 5 ms of CPU time each, never a block, until one is stopped in
+        # the middle. Timers: after 0.3 s of them. Polling: while the watchdog's thread
+        # waits for the answer to a probe it posted in that very callback (the only time
+        # a stop can matter to polling; answered once the loop turns, after the callback).
+        since = time.monotonic()
+        while True:
+            probed.clear()
+            spin(0.005)
+            if POLLING:
+                ready = probed.is_set() and spin(0.1, lambda: awaiting_the_answer(watch._thread))
+            else:
+                ready = time.monotonic() - since >= 0.3
+            if ready:
+                break
+            await asyncio.sleep(0)
+        print("stopping", flush=True)
+        os.kill(os.getpid(), signal.SIGSTOP)  # the whole process, until the test continues it
+        # Back, the callback goes on a while: the watchdog's thread, late for its deadline,
+        # looks at the loop before it turns (and its probe is answered).
+        spin(0.05)
         await asyncio.sleep(0)
+    await done.wait()
     watch.stop()
     print(watch.blocks, flush=True)
 
@@ -325,9 +367,11 @@ def _state(pid: int) -> str:
 
 
 def test_a_process_that_was_stopped_is_not_reported_as_blocked(tmp_path: Path, mode: str) -> None:
-    # SIGSTOP, 0.6 s, SIGCONT: the clock jumps, and both threads go on at once; the
-    # watchdog's deadline expired meanwhile. It used to blame the callback the loop
-    # was in ("a callback blocks it at <file:line>").
+    # SIGSTOP in the middle of a callback, 0.6 s, SIGCONT: the clock jumps, and both
+    # threads go on at once; the watchdog's deadline (polling: its wait for the loop's
+    # answer) expired meanwhile. It used to blame the callback the loop was in ("a
+    # callback blocks it at <file:line>"). The process stops itself where a stop
+    # matters, so the test sees the defect every time, however loaded the machine.
     script = tmp_path / "stopped.py"
     script.write_text(STOPPED, encoding="utf-8")
     with started(
@@ -336,12 +380,11 @@ def test_a_process_that_was_stopped_is_not_reported_as_blocked(tmp_path: Path, m
         assert child.stdout is not None
         assert child.stdout.readline() == "busy\n"
         for _ in range(3):
-            time.sleep(0.3)  # busy a while
-            child.send_signal(signal.SIGSTOP)
+            assert child.stdout.readline() == "stopping\n"
             deadline = time.monotonic() + HANG_GUARD
             while _state(child.pid) != "T" and time.monotonic() < deadline:
                 time.sleep(0.001)
-            time.sleep(0.6)  # stopped
+            time.sleep(0.6)  # stopped (at least this long: twice the threshold)
             child.send_signal(signal.SIGCONT)
         out, err = child.communicate("done\n", timeout=HANG_GUARD)
     assert (child.returncode, out, err) == (0, "0\n", "")
