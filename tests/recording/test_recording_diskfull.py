@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import EventKind, RecordingError, Robot, action
 from pyrobots_aio.recording import JsonlRecorder, load
 
@@ -81,7 +82,7 @@ async def test_a_full_disk_stops_the_recording_not_the_robot(
         "the events written before, up to its last whole line, without an end record"
     )
     assert isinstance(recorder.error, OSError)
-    warnings = [r for r in caplog.records if r.levelno >= logging.WARNING]
+    warnings = logged(caplog, logging.WARNING)
     assert [(r.name, r.levelname, r.getMessage()) for r in warnings] == [
         (
             "pyrobots_aio.recording",
@@ -117,7 +118,7 @@ async def test_a_disk_that_fills_before_close_fails_the_close(
             await _blinks(robot, 50)
     assert path.read_bytes().endswith(b"\n")
     assert not load(path).complete
-    assert sum(r.levelno == logging.WARNING for r in caplog.records) == 1
+    assert sum(r.levelno == logging.WARNING for r in logged(caplog)) == 1
 
 
 def _fill(path: Path) -> None:
