@@ -76,12 +76,13 @@ class Robot(StateMethods, EmergencyStop):
             SIGTERM over unless the program handles them already: the first
             cancels the task that entered ``async with robot`` (an orderly
             shutdown, cleanup bounded by ``cancel_grace``), a second cuts the
-            cleanup short, a third gets Python's default; leaving the block then
-            raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM),
-            unless the program caught the cancellation and left the block
-            normally (as under ``asyncio.run``). The count goes on while the
-            program unwinds, until the event loop closes: a second signal never
-            ends the process in the middle of a recorder's close.
+            cleanup short, a third gets Python's default; once that task is
+            done, `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM)
+            comes out of the event loop if the cancellation ended it, not if
+            the program caught it, inside the block or around it, and went on
+            (``asyncio.run``'s rule). The count goes on while the program
+            unwinds, until the event loop closes: a second signal never ends
+            the process in the middle of a recorder's close.
             False: leave the signals alone (see `pyrobots_aio.cli.stop_on_signals`).
 
     Examples:
