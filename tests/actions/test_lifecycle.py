@@ -9,6 +9,7 @@ from collections.abc import Callable
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import (
     ActionCancelled,
     ActionDefinitionError,
@@ -61,7 +62,7 @@ async def test_cancel_grace_warns_with_location_then_abandons(
     # Abandoned, its body was ended: no task is left behind, its outcome untouched.
     assert [t for t in asyncio.all_tasks() if t.get_name() == f"deaf#{handle.id}"] == []
     assert handle.outcome is Outcome.CANCELLED
-    messages = [(r.levelno, r.getMessage()) for r in caplog.records if r.name.startswith("pyr")]
+    messages = [(r.levelno, r.getMessage()) for r in logged(caplog) if r.name.startswith("pyr")]
     assert messages[0][0] == logging.WARNING
     assert messages[0][1].startswith(
         f"action deaf#{handle.id} still running 2 s after cancellation, at "
@@ -94,7 +95,7 @@ async def test_cancel_grace_cancels_a_slow_cleanup_again(caplog: pytest.LogCaptu
         assert handle.finished_at == 0.5 + 2.0
         assert handle.cancel_reason == "stop"
     assert log == []  # the cleanup's sleep was interrupted by the second cancellation
-    assert [r.levelno for r in caplog.records if r.name.startswith("pyrobots_aio")] == [
+    assert [r.levelno for r in logged(caplog) if r.name.startswith("pyrobots_aio")] == [
         logging.WARNING
     ]
 
@@ -108,7 +109,7 @@ async def test_no_watchdog_timer_outlives_the_robot(caplog: pytest.LogCaptureFix
         handle.cancel("stop")
         await handle.wait_done()
     await asyncio.sleep(10)  # past every deadline the watchdog ever had
-    assert [(r.name, r.levelno) for r in caplog.records if r.levelno >= logging.WARNING] == [
+    assert [(r.name, r.levelno) for r in logged(caplog, logging.WARNING)] == [
         ("pyrobots_aio.actions", logging.WARNING)
     ]
 

@@ -7,6 +7,7 @@ import logging
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import ActionCancelled, ActionHandle, Outcome, Robot, action
 from pyrobots_aio.actions import current_action
 
@@ -44,7 +45,7 @@ def _cleanup_of(robot: Robot, handle: ActionHandle[None]) -> ActionHandle[str]:
 
 
 def _warnings(caplog: pytest.LogCaptureFixture) -> list[str]:
-    return [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    return [r.getMessage() for r in logged(caplog, logging.WARNING)]
 
 
 @pytest.mark.asyncio

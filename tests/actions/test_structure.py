@@ -5,6 +5,7 @@ import logging
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import (
     ActionCancelled,
     ActionInterrupted,
@@ -366,7 +367,7 @@ async def test_a_parent_waiting_for_its_slow_cleanup_child_is_not_abandoned(
         assert child.done()
         assert child.cancel_reason == "the task awaiting it was cancelled"
         assert (handle.finished_at, child.finished_at) == (1 + 2 + 2, 1 + 2 + 2)
-    assert [r.levelno for r in caplog.records if r.name.startswith("pyrobots_aio")] == [
+    assert [r.levelno for r in logged(caplog) if r.name.startswith("pyrobots_aio")] == [
         logging.WARNING,  # walk cancelled again at 3 s
         logging.WARNING,  # rest cancelled again at 5 s
     ]

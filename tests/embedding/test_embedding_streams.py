@@ -7,6 +7,7 @@ import logging
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import Robot
 
 
@@ -21,7 +22,7 @@ async def test_a_stream_dropped_before_its_first_value_leaves_no_subscriber(
         gc.collect()
         for level in range(10):
             robot.state.battery = level / 10
-    warnings = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    warnings = [r.getMessage() for r in logged(caplog, logging.WARNING)]
     assert warnings == []
 
 
@@ -37,5 +38,5 @@ async def test_a_stream_left_after_its_first_value_unsubscribes(
         await changes.aclose()  # what a framework does when the client leaves
         for level in range(10):
             robot.state.battery = level / 10
-    warnings = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    warnings = [r.getMessage() for r in logged(caplog, logging.WARNING)]
     assert warnings == []

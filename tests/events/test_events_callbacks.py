@@ -8,6 +8,7 @@ from typing import Any
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import (
     ActionCancelled,
     EventKind,
@@ -224,7 +225,7 @@ async def test_a_failing_action_callback_is_logged_by_the_executive(
             robot.state.bumper = False
             await robot.sleep(0.1)
         assert monitor.firings == 2
-    records = [r for r in caplog.records if r.name.startswith("pyrobots_aio")]
+    records = [r for r in logged(caplog) if r.name.startswith("pyrobots_aio")]
     assert [r.getMessage().splitlines()[0] for r in records] == [
         "action broken#1 failed and nobody retrieved its error:",
         "action broken#2 failed and nobody retrieved its error:",

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from log_support import logged
 from pyrobots_aio import Robot, RobotNotRunningError, UnknownStateKeyError
 
 pytestmark = pytest.mark.virtual_time
@@ -60,7 +61,7 @@ async def test_a_slow_consumer_loses_the_oldest_values_with_one_warning(
         got = [await anext(changes) for _ in range(3)]
         await changes.aclose()
     assert got == [0.8, 0.9, 1.0]
-    assert [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING] == [
+    assert [r.getMessage() for r in logged(caplog, logging.WARNING)] == [
         "watch('ir') fell 3 values behind; dropping the oldest (raise buffer= or consume faster)"
     ]
 

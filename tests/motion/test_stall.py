@@ -8,6 +8,7 @@ however it starts, never does.
 
 from __future__ import annotations
 
+import asyncio
 import math
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,10 @@ if TYPE_CHECKING:
 
 pytestmark = [pytest.mark.asyncio, pytest.mark.virtual_time]
 
+BOUND = 120.0
+"""Simulated seconds a stalling test gets: without stall detection, a motion into a wall
+pushes for ever (the loop never idles, so pytest's own timeout never gets to fire)."""
+
 
 def stalled(action: str, v: str, w: str, seconds: str, timeout: str = "1.5") -> str:
     return (
@@ -33,7 +38,7 @@ def stalled(action: str, v: str, w: str, seconds: str, timeout: str = "1.5") -> 
 
 async def test_a_drive_into_a_wall_stops_with_a_motion_error_once_stalled(base: Base) -> None:
     log = EventLog()
-    async with base.make(instruments=[log]) as robot:
+    async with base.make(instruments=[log]) as robot, asyncio.timeout(BOUND):
         assert robot.stall_timeout == STALL_TIMEOUT == 1.5
         await robot.undock()
         start = robot.time()
@@ -51,7 +56,7 @@ async def test_a_drive_into_a_wall_stops_with_a_motion_error_once_stalled(base: 
 
 
 async def test_the_bound_is_the_bases_stall_timeout(base: Base) -> None:
-    async with base.make(stall_timeout=3) as robot:
+    async with base.make(stall_timeout=3) as robot, asyncio.timeout(BOUND):
         assert robot.stall_timeout == 3.0
         await robot.undock()
         await robot.drive_distance(2.0)
@@ -88,7 +93,7 @@ async def test_a_paused_motion_does_not_count_its_frozen_time(base: Base) -> Non
 
 
 async def test_jammed_wheels_stall_a_turn_and_a_navigation() -> None:
-    async with FakeBase(start=(0.0, 0.0, 0.0)) as robot:
+    async with FakeBase(start=(0.0, 0.0, 0.0)) as robot, asyncio.timeout(BOUND):
         robot.world.jammed = True
         with pytest.raises(MotionError) as caught:
             await robot.rotate_angle(1.0)

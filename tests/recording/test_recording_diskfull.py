@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from log_support import logged, without_watchdog
 from pyrobots_aio import EventKind, RecordingError, Robot, action
 from pyrobots_aio.recording import JsonlRecorder, load
 
@@ -81,7 +82,7 @@ async def test_a_full_disk_stops_the_recording_not_the_robot(
         "the events written before, up to its last whole line, without an end record"
     )
     assert isinstance(recorder.error, OSError)
-    warnings = [r for r in caplog.records if r.levelno >= logging.WARNING]
+    warnings = logged(caplog, logging.WARNING)
     assert [(r.name, r.levelname, r.getMessage()) for r in warnings] == [
         (
             "pyrobots_aio.recording",
@@ -117,7 +118,7 @@ async def test_a_disk_that_fills_before_close_fails_the_close(
             await _blinks(robot, 50)
     assert path.read_bytes().endswith(b"\n")
     assert not load(path).complete
-    assert sum(r.levelno == logging.WARNING for r in caplog.records) == 1
+    assert sum(r.levelno == logging.WARNING for r in logged(caplog)) == 1
 
 
 def _fill(path: Path) -> None:
@@ -162,34 +163,9 @@ def test_a_file_size_limit_stops_the_demo_cleanly(tmp_path: Path) -> None:
     assert path.stat().st_size <= SMALL
 
 
-_RECORD = re.compile(r" *(?:\d+\.\d{3})?  [A-Z]+ +(\S+)")
-"""The first line of a console log record: time since start, level, logger.
-
-The time is blank for a record logged off the loop's thread: the watchdog's WARNING
-(the INFO when the loop turns again is logged on the loop, with its time).
-"""
-
-
-def _without_watchdog(stderr: str) -> list[str]:
-    """The lines of ``stderr`` but the loop watchdog's records (each with its stack).
-
-    A loaded machine can stall the demo's loop for the watchdog's threshold: a report
-    of the machine, not of the recording under test.
-    """
-    kept: list[str] = []
-    dropping = False
-    for line in stderr.splitlines():
-        start = _RECORD.match(line)
-        if start is not None or line.startswith("pyrobots-aio: "):
-            dropping = start is not None and start.group(1) == "watchdog"
-        if not dropping:
-            kept.append(line)
-    return kept
-
-
 def _check_the_demo_failed(done: subprocess.CompletedProcess[str], path: Path, why: str) -> None:
     assert done.returncode == 1, done.stderr
-    lines = _without_watchdog(done.stderr)
+    lines = without_watchdog(done.stderr)
     assert "Traceback" not in done.stderr
     assert len(lines) == 2, done.stderr
     warning = (
@@ -227,7 +203,7 @@ def test_the_watchdog_s_reports_are_left_out_of_the_lines_checked() -> None:
         "    mujoco.mj_step(model, data, nstep=rest)\n"
         "pyrobots-aio: error: recording to x failed\n"
     )
-    assert _without_watchdog(stderr) == [
+    assert without_watchdog(stderr) == [
         "    4.000  WARNING recording  walk#3  recording to x stopped",
         "pyrobots-aio: error: recording to x failed",
     ]

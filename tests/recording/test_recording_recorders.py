@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
+from log_support import logged
 from pyrobots_aio import RecordingError, Robot, action
 from pyrobots_aio.recording import JsonlRecorder, MemoryRecorder, load
 
@@ -222,7 +223,7 @@ async def test_events_after_close_are_dropped_with_one_warning(
         await nap(robot, 0.1)
     assert recorder.closed
     assert len(load(path).events) == 3
-    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    warnings = [r.getMessage() for r in logged(caplog) if r.levelno == logging.WARNING]
     assert warnings == [f"{recorder!r} is closed; events are no longer recorded"]
 
 

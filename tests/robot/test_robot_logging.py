@@ -7,6 +7,7 @@ import logging
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import ActionCancelled, Robot, action
 
 pytestmark = pytest.mark.virtual_time
@@ -82,9 +83,7 @@ async def test_silent_keeps_what_went_wrong_and_drops_info_and_debug_of_that_rob
     async with loud:
         await _say_a_bit_of_everything(loud)
     said = [
-        (r.levelname, r.getMessage())
-        for r in caplog.records
-        if r.name.startswith("pyrobots_aio.") and r.name != "pyrobots_aio.watchdog"
+        (r.levelname, r.getMessage()) for r in logged(caplog) if r.name.startswith("pyrobots_aio.")
     ]
     went_wrong = [
         ("WARNING", "emergency stop: operator; preempting nothing"),
@@ -139,7 +138,7 @@ async def test_an_action_the_exit_cancels_before_it_ran_hints_at_a_missing_await
 ) -> None:
     async with Robot() as robot:
         nap(robot)  # forgot 'await'
-    assert [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING] == [
+    assert [r.getMessage() for r in logged(caplog, logging.WARNING)] == [
         "action nap#1 is cancelled by the robot's exit before it ever ran, and nothing waits "
         "for it: a missing 'await'? (await the handle before leaving 'async with robot:')"
     ]
@@ -158,4 +157,4 @@ async def test_no_hint_when_the_action_ran_was_awaited_or_was_cancelled_on_purpo
         await asyncio.sleep(0)
     await waiter
     assert ran.started_at is not None
-    assert [r for r in caplog.records if r.levelno >= logging.WARNING] == []
+    assert logged(caplog, logging.WARNING) == []

@@ -25,6 +25,7 @@ import websockets
 from foxglove_scene import check_scene
 from pyrobots_aio import PyRobotsError, Robot
 from pyrobots_aio.sim import SimRobot
+from pyrobots_aio.telemetry import _live
 
 PROTOCOL = websockets.Subprotocol("foxglove.sdk.v1")
 
@@ -61,6 +62,56 @@ class FoxgloveClient:
         await self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
 
 
+class Subscriptions:
+    """The topics the live view's server has taken a subscription to, as its listener hears.
+
+    The SDK tells the server's listener of each subscription once it is in place (the
+    listener sends the arena to the new subscriber then): a message logged after that
+    reaches the client.
+    """
+
+    def __init__(self) -> None:
+        self.topics: list[str] = []
+        self._lock = threading.Lock()
+        self._waiter: tuple[asyncio.AbstractEventLoop, asyncio.Event] | None = None
+
+    def heard(self, topic: str) -> None:
+        """Called in the SDK's thread: ``topic`` has a new subscription."""
+        with self._lock:
+            self.topics.append(topic)
+            waiter = self._waiter
+        if waiter is not None:
+            loop, changed = waiter
+            loop.call_soon_threadsafe(changed.set)
+
+    async def wait_for(self, *topics: str) -> None:
+        """Wait until each of ``topics`` has a subscription."""
+        changed = asyncio.Event()
+        with self._lock:
+            self._waiter = (asyncio.get_running_loop(), changed)
+        async with asyncio.timeout(30):  # a hang guard, not a timing
+            while True:
+                with self._lock:
+                    if set(topics) <= set(self.topics):
+                        self._waiter = None
+                        return
+                await changed.wait()
+                changed.clear()
+
+
+@pytest.fixture
+def subscriptions(monkeypatch: pytest.MonkeyPatch) -> Subscriptions:
+    """The subscriptions the live views' servers take from now on."""
+    seen, on_subscribe = Subscriptions(), _live._ArenaOnSubscribe.on_subscribe
+
+    def hearing(self: _live._ArenaOnSubscribe, client: object, channel: Any) -> None:
+        on_subscribe(self, client, channel)
+        seen.heard(channel.topic)
+
+    monkeypatch.setattr(_live._ArenaOnSubscribe, "on_subscribe", hearing)
+    return seen
+
+
 def _refused(port: int) -> bool:
     """Whether nothing listens on the port any more.
 
@@ -95,7 +146,9 @@ def _native_threads() -> int:
 
 
 @pytest.mark.asyncio
-async def test_a_client_subscribes_and_receives_pose_and_action_messages() -> None:
+async def test_a_client_subscribes_and_receives_pose_and_action_messages(
+    subscriptions: Subscriptions,
+) -> None:
     threads = _python_threads()
     robot = SimRobot(realtime=True, serve=0)
     async with robot:
@@ -118,7 +171,8 @@ async def test_a_client_subscribes_and_receives_pose_and_action_messages() -> No
             assert client.channels["/tf"]["schemaName"] == "foxglove.FrameTransforms"
             assert client.channels["/pyrobots/log"]["schemaName"] == "foxglove.Log"
             await client.subscribe("/pyrobots/pose", "/pyrobots/actions")
-            await asyncio.sleep(0.1)  # let the subscription land before the action starts
+            # the subscription is in place before the action starts
+            await subscriptions.wait_for("/pyrobots/pose", "/pyrobots/actions")
             walk = robot.undock()
             await asyncio.wait_for(
                 client.read_until(
@@ -158,7 +212,9 @@ async def test_each_robot_stops_its_server_and_leaves_no_thread() -> None:
 
 
 @pytest.mark.asyncio
-async def test_a_plain_robot_streams_its_state_timed_from_its_start() -> None:
+async def test_a_plain_robot_streams_its_state_timed_from_its_start(
+    subscriptions: Subscriptions,
+) -> None:
     loop = asyncio.get_running_loop()
     robot = Robot(serve=0)
     before = loop.time()  # the machine's monotonic clock: hours or days, not seconds of a run
@@ -174,7 +230,7 @@ async def test_a_plain_robot_streams_its_state_timed_from_its_start() -> None:
                 client.read_until(lambda c: "/pyrobots/state/speed" in c.channels), 30
             )
             await client.subscribe("/pyrobots/state/speed")
-            await asyncio.sleep(0.1)
+            await subscriptions.wait_for("/pyrobots/state/speed")
             robot.state.speed = 0.5
             written = robot.state.timestamp("speed")
             await asyncio.wait_for(

@@ -14,6 +14,7 @@ import pytest
 
 from pyrobots_aio import EventKind, Robot, action
 from pyrobots_aio._core import _signals
+from pyrobots_aio.loops import new_virtual_loop
 from pyrobots_aio.recording import load
 from signal_support import HANG_GUARD, started, wait_delivered
 
@@ -55,8 +56,9 @@ async def test_a_signal_the_program_handles_is_left_alone() -> None:
         signal.signal(signal.SIGTERM, previous)
 
 
-@pytest.mark.asyncio
-async def test_sigterm_stops_the_robot_in_order_and_raises_system_exit_143() -> None:
+def test_sigterm_stops_the_robot_in_order_and_ends_the_program_with_system_exit_143() -> None:
+    # As asyncio.run's KeyboardInterrupt, the end comes out of the loop once the main task
+    # is done, cancelled: here, of loop.run_until_complete (on the main thread, as a program).
     cleaned: list[str] = []
 
     @action
@@ -75,19 +77,26 @@ async def test_sigterm_stops_the_robot_in_order_and_raises_system_exit_143() -> 
             os.kill(os.getpid(), signal.SIGTERM)
             await asyncio.sleep(60)
 
+    async def afresh() -> None:
+        async with Robot():  # a robot entered meanwhile takes them afresh
+            assert not _signals._lingering
+
     before = _handlers()
-    with pytest.raises(SystemExit) as ended:
-        await main()
-    assert ended.value.code == 143
-    assert cleaned == ["hold"]
-    # The program unwinds with the signals still taken (what encloses the robot, a
-    # recorder, still has to close): the next one is a second one, not Python's default.
-    assert _handlers() != before
-    [stop] = _signals._lingering
-    assert stop.received == [signal.SIGTERM]
-    async with Robot():  # a robot entered meanwhile takes them afresh
-        assert not _signals._lingering
-    assert _handlers() == before
+    loop = asyncio.new_event_loop()
+    try:
+        with pytest.raises(SystemExit) as ended:
+            loop.run_until_complete(main())
+        assert ended.value.code == 143
+        assert cleaned == ["hold"]
+        # The program unwinds with the signals still taken (what encloses the robot, a
+        # recorder, still has to close): the next one is a second one, not Python's default.
+        assert _handlers() != before
+        [stop] = _signals._lingering
+        assert stop.received == [signal.SIGTERM]
+        loop.run_until_complete(afresh())
+        assert _handlers() == before
+    finally:
+        loop.close()
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
@@ -124,12 +133,10 @@ def test_a_robot_off_the_main_thread_leaves_the_signals_alone() -> None:
     assert during == [before]
 
 
-@pytest.mark.virtual_time
-@pytest.mark.asyncio
-async def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts() -> None:
+def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts() -> None:
     # The second Ctrl-C lands before the first one's cancellation has reached the
     # actions: its own cancel starts their cleanup, which must be cut short as well.
-    loop = asyncio.get_running_loop()
+    loop = new_virtual_loop()
 
     @action
     async def blink(robot: Robot) -> None:
@@ -153,10 +160,13 @@ async def test_a_second_signal_right_after_the_first_cuts_the_cleanup_it_starts(
             os.kill(os.getpid(), signal.SIGINT)
             await asyncio.sleep(3600)
 
-    start = loop.time()
-    with pytest.raises(KeyboardInterrupt):
-        await main()
-    assert loop.time() - start < 1.0  # not the 30 s cleanup
+    try:
+        start = loop.time()
+        with pytest.raises(KeyboardInterrupt):
+            loop.run_until_complete(main())
+        assert loop.time() - start < 1.0  # not the 30 s cleanup
+    finally:
+        loop.close()
 
 
 @pytest.mark.parametrize("value", ["no", 0, None])
@@ -201,6 +211,64 @@ def test_a_script_that_handles_the_cancellation_ends_normally(
     assert (child.returncode, out) == (0, "cleaned up\nafter the robot\nasyncio.run returned\n")
     again = "Ctrl-C" if signum == signal.SIGINT else signum.name
     assert err == f"{signum.name}: stopping the robot ({again} again stops at once)\n"
+
+
+AROUND = """
+import asyncio
+import sys
+
+from pyrobots_aio import Robot
+
+CAUGHT = sys.argv[1] == "caught"
+
+
+async def main():
+    try:
+        async with Robot():
+            print("ready", flush=True)
+            await asyncio.sleep(3600)
+    except asyncio.CancelledError:
+        if not CAUGHT:
+            raise
+        print("cleaned up around the robot", flush=True)
+    print("after the robot", flush=True)
+
+
+asyncio.run(main())
+print("asyncio.run returned", flush=True)
+"""
+
+
+@pytest.mark.parametrize("caught", [True, False], ids=["caught", "not-caught"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+def test_a_script_that_catches_the_cancellation_around_the_robot_ends_normally(
+    tmp_path: Path, signum: signal.Signals, caught: bool
+) -> None:
+    # asyncio.run's rule at the main task's end, not at the block's: KeyboardInterrupt
+    # (SystemExit(143)) only if the cancellation ended the task. Before: caught around
+    # `async with Robot()`, it still ended in KeyboardInterrupt (exit 130) or 143.
+    script = tmp_path / "around.py"
+    script.write_text(AROUND, encoding="utf-8")
+    command = [sys.executable, str(script), "caught" if caught else "not"]
+    with started(command, stdout=PIPE, stderr=PIPE) as child:
+        assert child.stdout is not None
+        assert child.stdout.readline() == "ready\n"
+        child.send_signal(signum)
+        out, err = child.communicate(timeout=HANG_GUARD)
+    again = "Ctrl-C" if signum == signal.SIGINT else signum.name
+    said = f"{signum.name}: stopping the robot ({again} again stops at once)\n"
+    if caught:
+        assert (child.returncode, out, err) == (
+            0,
+            "cleaned up around the robot\nafter the robot\nasyncio.run returned\n",
+            said,
+        )
+    elif signum == signal.SIGINT:  # Python's own ending: it re-raises SIGINT, after a traceback
+        assert (child.returncode, out) == (-signal.SIGINT, "")
+        assert err.startswith(said)
+        assert err.endswith("\nKeyboardInterrupt\n")
+    else:
+        assert (child.returncode, out, err) == (143, "", said)
 
 
 RECORDED = """

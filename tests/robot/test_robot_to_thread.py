@@ -265,6 +265,28 @@ async def test_while_32_abandoned_calls_run_a_call_is_refused_with_their_count(
 
 
 @pytest.mark.asyncio
+async def test_callers_waiting_in_a_batch_never_take_the_abandoned_calls_past_32() -> None:
+    # Any running call may yet be abandoned: beside 31 abandoned, one runs at a time. Before,
+    # a batch of callers passed the check together, and, all cancelled, left 37 running.
+    gate = Gate()
+    async with Robot(actions=[read_port]) as robot:
+        await _abandon(robot, gate, ABANDONED_CALLS - 1)
+        batch = [robot.read_port(gate) for _ in range(LIVE_CALLS)]
+        await gate.wait_for("started", ABANDONED_CALLS)  # the first of them runs
+        for handle in batch:
+            handle.cancel("operator")
+        for handle in batch:
+            assert await handle.wait_done() is Outcome.CANCELLED
+        with pytest.raises(TooManyAbandonedCalls) as refused:
+            await robot.to_thread(_answer)
+        assert refused.value.running == ["Gate.pass_"] * ABANDONED_CALLS
+        assert gate.started == ABANDONED_CALLS  # the rest of the batch never ran
+        threads = _to_threads()
+    gate.release.set()
+    _join(threads)
+
+
+@pytest.mark.asyncio
 async def test_the_exit_does_not_wait_for_an_abandoned_call_and_names_it(
     caplog: pytest.LogCaptureFixture,
 ) -> None:

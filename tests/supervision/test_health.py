@@ -7,6 +7,7 @@ from typing import Any
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import HealthMonitor, Outcome, Robot, StateError
 from pyrobots_aio.supervision import HealthLevel, HealthStatus
 
@@ -161,7 +162,7 @@ async def test_a_check_that_raises_is_an_error(caplog: pytest.LogCaptureFixture)
         assert health.statuses()["temperature"].message == (
             "check failed: TypeError(\"'<' not supported between instances of 'str' and 'int'\")"
         )
-    assert "health check" in caplog.records[0].getMessage()
+    assert "health check" in logged(caplog)[0].getMessage()
 
 
 async def test_a_transition_triggers_an_action() -> None:

@@ -10,6 +10,7 @@ import re
 
 import pytest
 
+from log_support import logged
 from pyrobots_aio import (
     ActionCancelled,
     ActionInterrupted,
@@ -160,7 +161,7 @@ async def test_each_attempt_is_a_child_action_after_its_backoff(
     # the retrying action and its three attempts, each a child of it
     assert robot.spawned("lift") == [(0.0, None), (0.0, 1), (0.3, 1), (0.7, 1)]
     assert robot.record.outcomes("lift") == ["failed", "failed", "succeeded", "succeeded"]
-    assert [r.getMessage() for r in caplog.records] == [
+    assert [r.getMessage() for r in logged(caplog)] == [
         "lift: attempt 1 of 4 failed (RuntimeError('arm controller timeout (attempt 1)')); "
         "retrying in 0.1 s",
         "lift: attempt 2 of 4 failed (RuntimeError('arm controller timeout (attempt 2)')); "

@@ -20,12 +20,16 @@ one:
 3. a third gets Python's default: `KeyboardInterrupt` where it lands (SIGINT),
    or the end of the process (SIGTERM), for a program that is stuck.
 
-On leaving the block after a signal, it raises `KeyboardInterrupt` (SIGINT) or
+After a signal, the program ends as Python's own handlers would end it, but
+after its cleanup, and by ``asyncio.run``'s rule: only if the cancellation
+ended the task that entered the block. The cancellation goes on out of the
+block; once that task is done, cancelled, `KeyboardInterrupt` (SIGINT) or
 ``SystemExit(143)`` (SIGTERM: 128 + 15, the status a shell reports for a
-process that SIGTERM ended), so that the program ends as Python's own handlers
-would end it, but after its cleanup. As under ``asyncio.run``, it raises only
-if the cancellation ended the block: a program that catches it, cleans up and
-leaves the block normally goes on, and gets the signals back at once.
+process that SIGTERM ended) comes out of the event loop, where
+``asyncio.run``'s own `KeyboardInterrupt` would. A program that catches the
+cancellation, cleans up and goes on, inside the block or around it, is not
+ended: it gets the signals back as it leaves the block (caught inside), or
+as its task ends (caught around it).
 
 A block that raises keeps the signals while the program unwinds (the
 recorders around ``async with robot`` write their last events and end record,
@@ -187,16 +191,22 @@ class SignalStop:
         if self._previous:
             _lingering.add(self)
 
+    def _answer_cancels(self) -> None:
+        """Answer the cancellations of the task that the signals requested (``uncancel``)."""
+        task = self._task
+        if task is not None:
+            for _ in range(min(self._cancels, task.cancelling())):
+                task.uncancel()
+        self._cancels = 0
+
     def __exit__(
         self,
         exc_type: type[BaseException] | None,
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
+        self._answer_cancels()
         task = self._task
-        if task is not None:
-            for _ in range(min(self._cancels, task.cancelling())):
-                task.uncancel()  # the cancellations this block requested are answered here
         if not self.received or exc is None:
             # No signal; or the program caught the cancellation and left the block normally:
             # it goes on (asyncio.run's rule: a handled cancellation is no KeyboardInterrupt).
@@ -207,10 +217,27 @@ class SignalStop:
             return  # a failure says more than the signal: let it through
         if task is None or task.cancelling():
             return  # someone else cancelled the task too: theirs to handle
+        # The code around the block may still catch the cancellation: the task's end tells.
+        task.add_done_callback(self._ended)
+
+    def _ended(self, task: asyncio.Task[object]) -> None:
+        """The task that entered the block is done: end the program if it ended cancelled.
+
+        As ``asyncio.run`` does on Ctrl-C, and from the same place (the event
+        loop): the exception leaves ``loop.run_until_complete``. A task that
+        caught the cancellation around the block and ended otherwise goes on
+        as the program wishes, with the signals given back.
+        """
+        self._answer_cancels()  # (a second signal after the block cancelled it again)
+        if not task.cancelled():
+            self._restore()
+            return
+        if task.cancelling():
+            return  # someone else cancelled the task too: theirs to handle
         first = self.received[0]
         if first == signal.SIGINT:
-            raise KeyboardInterrupt from None
-        raise SystemExit(128 + first) from None
+            raise KeyboardInterrupt
+        raise SystemExit(128 + first)
 
     def __repr__(self) -> str:
         handled = [s.name for s in self.handled]
@@ -224,11 +251,13 @@ def stop_on_signals() -> SignalStop:
     Enter it in the main task, around the recorders and ``async with robot``
     so that their closing is inside: the first signal cancels that task (the
     robot shuts down, cleanup bounded by ``cancel_grace``), a second cuts the
-    cleanup short, a third gets Python's default. Leaving the block after a
-    signal raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)``
-    (SIGTERM), unless the program caught the cancellation and left the block
-    normally; the count goes on until the event loop closes. Signals the
-    program handles itself are left alone.
+    cleanup short, a third gets Python's default. After a signal, once the
+    task that entered the block is done, `KeyboardInterrupt` (SIGINT) or
+    ``SystemExit(143)`` (SIGTERM) comes out of the event loop, as under
+    ``asyncio.run``: only if the cancellation ended that task, not if the
+    program caught it (inside the block or around it) and went on; the count
+    goes on until the event loop closes. Signals the program handles itself
+    are left alone.
 
     Examples:
         >>> import asyncio

@@ -8,6 +8,7 @@ which action runs the task on a blocked loop; `Workers` are the threads of
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextvars
 import functools
 import os
@@ -59,17 +60,21 @@ class Workers(Executor):
     """The threads of ``robot.to_thread`` for one run of a robot: started on demand, reused.
 
     At most `LIVE_CALLS` calls run at once for callers that still wait; later
-    callers wait their turn. A caller cancelled meanwhile gives its turn up at
-    once: its call, abandoned, runs on in its thread (Python cannot stop a
-    thread) and later calls get other threads, never waiting behind it. While
-    `ABANDONED_CALLS` abandoned calls still run, `run` refuses with
-    `TooManyAbandonedCalls`. `close` waits for no call: idle threads end at
-    once, busy ones as soon as their call returns.
+    callers wait their turn, first come first served. A caller cancelled
+    meanwhile gives its turn up at once: its call, abandoned, runs on in its
+    thread (Python cannot stop a thread) and later calls get other threads,
+    never waiting behind it. Never more than `ABANDONED_CALLS` abandoned calls
+    run: each call running for a caller may yet be abandoned, so the turns
+    shrink as abandoned calls fill that room (with 31, one call runs at a
+    time), and while that many run, `run` refuses with `TooManyAbandonedCalls`.
+    `close` waits for no call: idle threads end at once, busy ones as soon as
+    their call returns.
     """
 
     def __init__(self, log: ScopedLogger) -> None:
         self._log = log
-        self._turns = asyncio.Semaphore(LIVE_CALLS)
+        self._live = 0  # calls running for callers that still wait (the loop's thread only)
+        self._queue: collections.deque[asyncio.Event] = collections.deque()  # callers in turn
         self._lock = threading.Lock()  # what follows is shared with the worker threads
         self._idle: list[_Worker] = []
         self._abandoned: dict[_Call[Any], None] = {}
@@ -82,24 +87,55 @@ class Workers(Executor):
         The call runs in a copy of the caller's context. Abandoned, its result
         is dropped, and an exception it raises is logged with its traceback.
         """
-        async with self._turns:
-            call = _Call(self, fn, *args)
-            self._check_room(call.name)
-            try:  # (the loop's run_in_executor: virtual time stands still until it returns)
-                await asyncio.shield(loop.run_in_executor(self, call.run))
-            except asyncio.CancelledError:
-                self._abandon(call)
-                raise
+        call = _Call(self, fn, *args)
+        await self._take_turn(call.name)
+        try:  # (the loop's run_in_executor: virtual time stands still until it returns)
+            await asyncio.shield(loop.run_in_executor(self, call.run))
+        except asyncio.CancelledError:
+            self._abandon(call)  # counted as abandoned before its turn is given up
+            raise
+        finally:
+            self._live -= 1
+            self._wake()
         return call.result()
 
-    def _check_room(self, name: str) -> None:
+    async def _take_turn(self, name: str) -> None:
+        """Wait until a call may run: first in line, and room for one more that may be abandoned.
+
+        Raises:
+            RobotNotRunningError: The robot has stopped.
+            TooManyAbandonedCalls: `ABANDONED_CALLS` abandoned calls run.
+        """
+        turn = asyncio.Event()
+        self._queue.append(turn)
+        try:
+            while True:
+                abandoned = self._check_room(name)
+                room = min(LIVE_CALLS, ABANDONED_CALLS - abandoned)
+                if self._queue[0] is turn and self._live < room:
+                    self._live += 1
+                    return
+                turn.clear()
+                await turn.wait()  # a call gave its turn up, or a caller left the line
+        finally:
+            self._queue.remove(turn)
+            self._wake()
+
+    def _wake(self) -> None:
+        """Have the first caller in line look again (the others follow when it leaves)."""
+        if self._queue:
+            self._queue[0].set()
+
+    def _check_room(self, name: str) -> int:
+        """The number of abandoned calls still running; raise if no call may start now."""
         if self._closed:
             msg = f"cannot call robot.to_thread({name}): the robot has stopped"
             raise RobotNotRunningError(msg)
-        with self._lock:
+        with self._lock:  # (their threads only ever lower it meanwhile)
             running = [call.name for call in self._abandoned]
         if len(running) >= ABANDONED_CALLS:
             raise TooManyAbandonedCalls(name, running)
+        return len(running)
 
     def _abandon(self, call: _Call[Any]) -> None:
         """Its caller was cancelled: count it until it returns, then report a late error."""
@@ -159,6 +195,7 @@ class Workers(Executor):
             self._closed = True
             idle, self._idle = self._idle, []
             running = [call.name for call in self._abandoned]
+        self._wake()  # callers still in line are refused
         for worker in idle:
             worker.jobs.put(None)
         for worker in idle:

@@ -76,12 +76,13 @@ class Robot(StateMethods, EmergencyStop):
             SIGTERM over unless the program handles them already: the first
             cancels the task that entered ``async with robot`` (an orderly
             shutdown, cleanup bounded by ``cancel_grace``), a second cuts the
-            cleanup short, a third gets Python's default; leaving the block then
-            raises `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM),
-            unless the program caught the cancellation and left the block
-            normally (as under ``asyncio.run``). The count goes on while the
-            program unwinds, until the event loop closes: a second signal never
-            ends the process in the middle of a recorder's close.
+            cleanup short, a third gets Python's default; once that task is
+            done, `KeyboardInterrupt` (SIGINT) or ``SystemExit(143)`` (SIGTERM)
+            comes out of the event loop if the cancellation ended it, not if
+            the program caught it, inside the block or around it, and went on
+            (``asyncio.run``'s rule). The count goes on while the program
+            unwinds, until the event loop closes: a second signal never ends
+            the process in the middle of a recorder's close.
             False: leave the signals alone (see `pyrobots_aio.cli.stop_on_signals`).
 
     Examples:
@@ -421,8 +422,10 @@ class Robot(StateMethods, EmergencyStop):
         Up to ``min(32, os.cpu_count() + 4)`` calls (as many as asyncio's
         default executor runs) run at once for callers that still wait; further
         callers wait their turn. An abandoned call gives its turn up at once
-        and runs on beside them, so a later call never waits behind it; but
-        while 32 abandoned calls still run, a call is refused with
+        and runs on beside them, so a later call never waits behind it. Never
+        more than 32 abandoned calls run: as any running call may yet be
+        abandoned, fewer run at once as abandoned ones fill that room (one at
+        a time beside 31), and while 32 run, a call is refused with
         `TooManyAbandonedCalls`, which counts them. The robot's exit waits for
         no call: it logs a WARNING naming the abandoned calls still running;
         each of their threads ends when its call returns, and no thread is left
