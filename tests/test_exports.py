@@ -57,6 +57,9 @@ EXPORTS: dict[str, list[str]] = {
         "ConsoleHandler", "SignalStop", "install_console_handler", "main", "stop_on_signals",
     ],
     "pyrobots_aio.events": ["Conditions", "EventManager", "EventMonitor", "Predicate"],
+    "pyrobots_aio.lowlevel": [
+        "as_float", "finite", "limit_speeds", "park", "shown", "wrap_angle",
+    ],
     "pyrobots_aio.loops": [
         "ScaledTimeLoop", "VirtualTimeLoop", "is_virtual", "new_virtual_loop", "run_lockstep",
         "run_scaled", "scaled_loop",
@@ -66,7 +69,9 @@ EXPORTS: dict[str, list[str]] = {
         "Controllers", "DriveBackend", "DriveBase", "Pose2D", "Sensor", "SensorKind",
         "TickedWorld", "TickingBackend",
     ],
-    "pyrobots_aio.poses": ["FrameProvider", "FrameTree", "Pose", "PoseLike", "PoseManager"],
+    "pyrobots_aio.poses": [
+        "FrameProvider", "FrameTree", "Matrix", "Pose", "PoseLike", "PoseManager",
+    ],
     "pyrobots_aio.recording": [
         "FORMAT", "VERSION", "ActionStats", "Cancellation", "Failure", "JsonlRecorder",
         "JsonlSink", "McapRecorder", "McapSink", "MemoryRecorder", "MemorySink", "Outcomes",

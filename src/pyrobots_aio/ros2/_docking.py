@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from .._exceptions import MotionError
 from ..actions import action, lock
+from ..lowlevel import park
 from ..motion import WHEELS, DriveBase
-from ..motion._base import park
 from ._create3 import CREATE3, CREATE3_ACTIONS, create3_action
 
 __all__ = ["ProfileDocking"]
