@@ -58,7 +58,8 @@ EXPORTS: dict[str, list[str]] = {
     ],
     "pyrobots_aio.events": ["Conditions", "EventManager", "EventMonitor", "Predicate"],
     "pyrobots_aio.lowlevel": [
-        "as_float", "finite", "limit_speeds", "park", "shown", "wrap_angle",
+        "as_float", "finite", "jsonable", "limit_speeds", "null_nonfinite", "park", "shown",
+        "strict_json", "wrap_angle",
     ],
     "pyrobots_aio.loops": [
         "ScaledTimeLoop", "VirtualTimeLoop", "is_virtual", "new_virtual_loop", "run_lockstep",
@@ -70,7 +71,7 @@ EXPORTS: dict[str, list[str]] = {
         "TickedWorld", "TickingBackend",
     ],
     "pyrobots_aio.poses": [
-        "FrameProvider", "FrameTree", "Matrix", "Pose", "PoseLike", "PoseManager",
+        "FrameProvider", "FrameTree", "Matrix", "Pose", "Pose2D", "PoseLike", "PoseManager",
     ],
     "pyrobots_aio.recording": [
         "FORMAT", "VERSION", "ActionStats", "Cancellation", "Failure", "JsonlRecorder",
@@ -106,8 +107,8 @@ EXPORTS: dict[str, list[str]] = {
     ],
     "pyrobots_aio.telemetry": [
         "ARENA", "EVENT", "FIXED_CHANNELS", "POSE_IN_FRAME", "SAMPLE", "SCENE_UPDATE", "SCHEMAS",
-        "FoxgloveChannels", "LiveView", "LogForwarder", "Message", "Pose2D", "StateSampler",
-        "TelemetrySource", "finite", "floor_plan", "jsonable", "strict_json",
+        "FloorShape", "FoxgloveChannels", "LiveView", "LogForwarder", "Message",
+        "StateSampler", "TelemetrySource", "floor_plan",
     ],
     "pyrobots_aio.testing": [
         "EventLog", "FakeBase", "FakeWorld", "Injection", "inject_bump", "inject_state",

@@ -13,7 +13,7 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 6. ``motion`` (`DriveBase`: the motion actions, over any base's `DriveBackend`;
    the sensor table), ``supervision``
    (retry, timeout, health monitor, state machine), ``lowlevel`` (the helpers
-   the layers above share: number checks, wheel-speed limits)
+   the layers above share: number checks, wheel-speed limits, strict JSON)
 7. ``recording``, ``sim``, ``testing`` (public API only)
 8. ``ros2`` (public API only)
 9. ``cli`` (public API only; its ``sim-node`` runs ``sim`` over ``ros2``)

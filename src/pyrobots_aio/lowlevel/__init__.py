@@ -14,13 +14,19 @@ keeps such parts in ``trio.lowlevel``):
   top speed (as the simulator's and `pyrobots_aio.testing.FakeBase`'s worlds
   do), `wrap_angle` keeps a heading within ``[-pi, pi]``;
 - `park`, the motion actions' pause hook (``@action(on_pause=park)``): a
-  paused motion action stops the wheels.
+  paused motion action stops the wheels;
+- strict JSON, as recordings and the Foxglove channels write it:
+  `strict_json` writes NaN and the infinities as null (`null_nonfinite`), and
+  what ``json`` cannot encode as `jsonable` makes it.
 
 Layer: beside ``motion`` and ``supervision`` (it re-exports ``_core`` and
 ``motion`` parts), below ``recording``, ``sim``, ``testing``, ``ros2`` and
 ``cli``.
 """
 
+from .._core._json import jsonable as jsonable
+from .._core._json import null_nonfinite as null_nonfinite
+from .._core._json import strict_json as strict_json
 from .._core._numbers import as_float as as_float
 from .._core._numbers import finite as finite
 from .._core._numbers import shown as shown
@@ -31,8 +37,11 @@ from ..motion._math import wrap_angle as wrap_angle
 __all__ = [
     "as_float",
     "finite",
+    "jsonable",
     "limit_speeds",
+    "null_nonfinite",
     "park",
     "shown",
+    "strict_json",
     "wrap_angle",
 ]

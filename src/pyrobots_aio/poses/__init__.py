@@ -12,6 +12,7 @@ from ._frames import FrameProvider as FrameProvider
 from ._frames import FrameTree as FrameTree
 from ._manager import PoseManager as PoseManager
 from ._math import Matrix as Matrix
+from ._math import Pose2D as Pose2D
 from ._parse import PoseLike as PoseLike
 from ._pose import Pose as Pose
 
@@ -20,6 +21,7 @@ __all__ = [
     "FrameTree",
     "Matrix",
     "Pose",
+    "Pose2D",
     "PoseLike",
     "PoseManager",
 ]
