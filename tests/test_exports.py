@@ -57,6 +57,10 @@ EXPORTS: dict[str, list[str]] = {
         "ConsoleHandler", "SignalStop", "install_console_handler", "main", "stop_on_signals",
     ],
     "pyrobots_aio.events": ["Conditions", "EventManager", "EventMonitor", "Predicate"],
+    "pyrobots_aio.lowlevel": [
+        "as_float", "finite", "jsonable", "limit_speeds", "null_nonfinite", "park", "shown",
+        "strict_json", "wrap_angle",
+    ],
     "pyrobots_aio.loops": [
         "ScaledTimeLoop", "VirtualTimeLoop", "is_virtual", "new_virtual_loop", "run_lockstep",
         "run_scaled", "scaled_loop",
@@ -66,7 +70,9 @@ EXPORTS: dict[str, list[str]] = {
         "Controllers", "DriveBackend", "DriveBase", "Pose2D", "Sensor", "SensorKind",
         "TickedWorld", "TickingBackend",
     ],
-    "pyrobots_aio.poses": ["FrameProvider", "FrameTree", "Pose", "PoseLike", "PoseManager"],
+    "pyrobots_aio.poses": [
+        "FrameProvider", "FrameTree", "Matrix", "Pose", "Pose2D", "PoseLike", "PoseManager",
+    ],
     "pyrobots_aio.recording": [
         "FORMAT", "VERSION", "ActionStats", "Cancellation", "Failure", "JsonlRecorder",
         "JsonlSink", "McapRecorder", "McapSink", "MemoryRecorder", "MemorySink", "Outcomes",
@@ -101,8 +107,8 @@ EXPORTS: dict[str, list[str]] = {
     ],
     "pyrobots_aio.telemetry": [
         "ARENA", "EVENT", "FIXED_CHANNELS", "POSE_IN_FRAME", "SAMPLE", "SCENE_UPDATE", "SCHEMAS",
-        "FoxgloveChannels", "LiveView", "LogForwarder", "Message", "Pose2D", "StateSampler",
-        "TelemetrySource", "finite", "floor_plan", "jsonable", "strict_json",
+        "FloorShape", "FoxgloveChannels", "LiveView", "LogForwarder", "Message",
+        "StateSampler", "TelemetrySource", "floor_plan",
     ],
     "pyrobots_aio.testing": [
         "EventLog", "FakeBase", "FakeWorld", "Injection", "inject_bump", "inject_state",

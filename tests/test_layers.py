@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,7 @@ LAYERS = {
     "robot": 5,
     "motion": 6,
     "supervision": 6,
+    "lowlevel": 6,
     "recording": 7,
     "sim": 7,
     "testing": 7,
@@ -38,21 +40,29 @@ def _part(module: str) -> str | None:
     return parts[1].removesuffix(".py")
 
 
-def _imports(where: tuple[str, ...], source: str) -> set[str]:
-    """The modules imported by the module at ``where`` in the package (every import, lazy too)."""
+def _imported(where: tuple[str, ...], source: str) -> Iterator[tuple[str, str | None]]:
+    """What the module at ``where`` in the package imports (every import, lazy too).
+
+    Each import as ``(module, name)``: ``name`` is what ``from module import name``
+    takes, None for ``import module``.
+    """
     here = ["pyrobots_aio", *where]
     package = here[:-1]  # for __init__.py too: "." is the package itself
-    found = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import):
-            found |= {alias.name for alias in node.names}
+            yield from ((alias.name, None) for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package[: len(package) - node.level + 1]
-                found.add(".".join([*base, node.module] if node.module else base))
-            elif node.module:
-                found.add(node.module)
-    return found
+                module = ".".join([*base, node.module] if node.module else base)
+            else:
+                module = node.module or ""
+            yield from ((module, alias.name) for alias in node.names)
+
+
+def _imports(where: tuple[str, ...], source: str) -> set[str]:
+    """The modules imported by the module at ``where`` in the package."""
+    return {module for module, _ in _imported(where, source)}
 
 
 def _upward(where: tuple[str, ...], source: str, layers: dict[str, float]) -> set[str]:
@@ -101,3 +111,73 @@ def test_the_check_reads_absolute_and_type_only_imports_too() -> None:
         "pyrobots_aio.recording",
         "pyrobots_aio.robot",
     }
+
+
+PUBLIC_ONLY = {part for part, level in LAYERS.items() if level >= LAYERS["recording"]}
+"""The parts that use the public API only (the package's docstring says which)."""
+
+
+def _private(where: tuple[str, ...], source: str) -> set[str]:
+    """What the module at ``where`` imports that is private to another part of the package.
+
+    Private: a module with a ``_`` part in its path, or a ``_`` name (dunders such
+    as ``__version__`` aside), outside the module's own part. ``_exceptions`` is
+    the one private module allowed, for the names the package exports (the
+    hierarchy is public there, as ``pyrobots_aio.StallError`` ...).
+    """
+    found = set()
+    for module, name in _imported(where, source):
+        parts = module.split(".")
+        if parts[0] != "pyrobots_aio" or parts[1:2] == [where[0]]:
+            continue
+        if parts[1:] == ["_exceptions"] and name in pyrobots_aio.__all__:
+            continue
+        path = [*parts[1:], name or ""]
+        if any(part.startswith("_") and not part.endswith("__") for part in path):
+            found.add(module if name is None else f"{module}:{name}")
+    return found
+
+
+PUBLIC_ONLY_MODULES = [p for p in MODULES if p.relative_to(PACKAGE).parts[0] in PUBLIC_ONLY]
+
+
+@pytest.mark.parametrize("path", PUBLIC_ONLY_MODULES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_the_upper_layers_import_only_public_modules_of_the_others(path: Path) -> None:
+    where = path.relative_to(PACKAGE).with_suffix("").parts
+    private = _private(where, path.read_text())
+    assert not private, f"{where[0]} uses the public API only, but imports {sorted(private)}"
+
+
+def test_the_check_finds_private_imports_of_other_parts() -> None:
+    # sim, testing and ros2 once took these from private modules (now pyrobots_aio.lowlevel's)
+    source = (
+        "from .._core._numbers import finite\n"
+        "from ..motion._math import limit_speeds\n"
+        "from ..motion import _base\n"
+        "from .. import _core\n"
+        "from .._exceptions import _Bad\n"
+        "def lazy():\n"
+        "    import pyrobots_aio.poses._math\n"
+    )
+    assert _private(("sim", "_world"), source) == {
+        "pyrobots_aio._core._numbers:finite",
+        "pyrobots_aio.motion._math:limit_speeds",
+        "pyrobots_aio.motion:_base",
+        "pyrobots_aio:_core",
+        "pyrobots_aio._exceptions:_Bad",
+        "pyrobots_aio.poses._math",
+    }
+
+
+def test_the_check_lets_public_names_and_the_modules_own_part_through() -> None:
+    source = (
+        "from .._exceptions import StallError\n"
+        "from .. import UnknownFrameError\n"
+        "from ..lowlevel import finite\n"
+        "from ..motion import DriveBase\n"
+        "from ._models import ModelLayout\n"
+        "from .._profiles import chosen_profile\n"
+        "from pyrobots_aio import __version__\n"
+        "import numpy._core\n"
+    )
+    assert _private(("testing", "explore", "_scenario"), source) == set()

@@ -12,10 +12,14 @@ Layers, lowest first; nothing imports upward (pinned by tests/test_layers.py):
 5. ``robot`` (the composition root)
 6. ``motion`` (`DriveBase`: the motion actions, over any base's `DriveBackend`;
    the sensor table), ``supervision``
-   (retry, timeout, health monitor, state machine)
+   (retry, timeout, health monitor, state machine), ``lowlevel`` (the helpers
+   the layers above share: number checks, wheel-speed limits, strict JSON)
 7. ``recording``, ``sim``, ``testing`` (public API only)
 8. ``ros2`` (public API only)
 9. ``cli`` (public API only; its ``sim-node`` runs ``sim`` over ``ros2``)
+
+"Public API only" is pinned too: those layers import no private module of
+another package (``_exceptions`` aside, for names this package exports).
 """
 
 from ._core._events import ActionAbandonment as ActionAbandonment

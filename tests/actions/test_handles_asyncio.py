@@ -56,6 +56,20 @@ async def test_done_callbacks_receive_the_handle_soon_after_it_is_done() -> None
 
 
 @pytest.mark.asyncio
+async def test_on_done_calls_in_place_before_the_done_callbacks_and_at_once_once_done() -> None:
+    # The library's own hook (monitors count the actions their callbacks start with it).
+    seen: list[str] = []
+    async with Robot() as robot:
+        handle = nap(robot, 0.5)
+        handle.add_done_callback(lambda h: seen.append("done-callback"))
+        handle.on_done(lambda h: seen.append(f"on_done {h.outcome.value}"))
+        await handle
+        assert seen == ["on_done succeeded", "done-callback"]
+        handle.on_done(lambda h: seen.append("late"))  # was never called: it waited for an end
+        assert seen[-1] == "late"
+
+
+@pytest.mark.asyncio
 async def test_remove_done_callback_counts_what_it_removed() -> None:
     seen: list[str] = []
 

@@ -1,5 +1,6 @@
-"""`pyrobots_aio.recording` and `pyrobots_aio.cli`: their docstring examples, and their layer:
-they use only the public API of the packages below them (tests/test_exports.py pins their names)."""
+"""`pyrobots_aio.recording` and `pyrobots_aio.cli`: their docstring examples, and how they import
+the packages below them: absolutely, as a program does (tests/test_layers.py pins that they
+import only public modules, tests/test_exports.py pins their names)."""
 
 from __future__ import annotations
 
@@ -28,13 +29,10 @@ def _imported(path: Path) -> list[str]:
 
 
 @pytest.mark.parametrize("package", ["recording", "cli"])
-def test_only_the_public_api_below_is_used(package: str) -> None:
+def test_the_packages_below_are_imported_absolutely(package: str) -> None:
     for path in sorted((SRC / package).glob("*.py")):
         for module in _imported(path):
-            if module.startswith((".", "pyrobots_aio")):
-                private = [p for p in module.split(".") if p.startswith("_")]
-                assert not module.startswith("."), f"{path.name} imports {module} (relative)"
-                assert not private, f"{path.name} imports the private module {module}"
+            assert not module.startswith("."), f"{path.name} imports {module} (relative)"
 
 
 @pytest.mark.parametrize(

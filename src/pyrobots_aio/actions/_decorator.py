@@ -9,7 +9,17 @@ from __future__ import annotations
 
 import functools
 import inspect
-from typing import TYPE_CHECKING, Any, Concatenate, Generic, ParamSpec, TypeVar, overload
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Concatenate,
+    Generic,
+    ParamSpec,
+    Protocol,
+    TypeVar,
+    overload,
+    runtime_checkable,
+)
 
 from .._exceptions import ActionDefinitionError
 
@@ -28,16 +38,24 @@ if TYPE_CHECKING:
     """An action's function: an ``async def`` taking the robot first."""
 
 
+@runtime_checkable
+class Runner(Protocol):
+    """What an action is called with first: something whose executive runs it (a `Robot`)."""
+
+    @property
+    def executive(self) -> Executive:
+        """The executive that starts the robot's actions."""
+
+
 def executive_of(robot: object, name: str) -> Executive:
-    """The executive of ``robot``, or a clear error naming what was passed instead."""
-    executive: Executive | None = getattr(robot, "_executive", None)
-    if executive is None:
+    """The executive of ``robot`` (a `Runner`), or a clear error naming what was passed instead."""
+    if not isinstance(robot, Runner):
         msg = (
             f"action {name!r} needs the robot as its first argument, got {robot!r}; "
             f"call it as {name}(robot, ...) or robot.{name}(...)"
         )
         raise ActionDefinitionError(msg)
-    return executive
+    return robot.executive
 
 
 class Action(Generic[R, P, T]):
@@ -67,8 +85,10 @@ class Action(Generic[R, P, T]):
         functools.update_wrapper(self, fn)
 
     def __call__(self, robot: R, /, *args: P.args, **kwargs: P.kwargs) -> ActionHandle[T]:
-        executive: Executive | None = getattr(robot, "_executive", None)
-        if executive is None:
+        runner: Any = robot  # a `Runner`, or the error below
+        try:
+            executive: Executive = runner.executive
+        except AttributeError:
             executive = executive_of(robot, self.name)  # raises, naming what was passed
         fn: Callable[..., Coroutine[Any, Any, T]] = self.fn
         # A call through ``*``/``**`` costs about 100 ns more than a plain one (a bare

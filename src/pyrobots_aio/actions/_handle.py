@@ -36,7 +36,7 @@ from ._where import definition, location
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Generator, Iterable
-    from types import TracebackType
+    from types import FrameType, TracebackType
 
     from .._core._instrument import Instruments
     from .._core._logging import ScopedLogger
@@ -411,6 +411,22 @@ class ActionHandle(Generic[T]):
             node = node.parent
         return False
 
+    def runs_in(self, task: object) -> bool:
+        """Whether ``task`` is the task running this action.
+
+        The loop watchdog asks, from its own thread, which action blocks the
+        loop (it only reads).
+        """
+        return self._task is task
+
+    def body_frame(self) -> FrameType | None:
+        """The frame of the action's body until the action is done, else None.
+
+        The loop watchdog looks there, from its own thread, for the line that
+        blocks the loop.
+        """
+        return getattr(self._coro, "cr_frame", None)
+
     def location(self) -> str | None:
         """Return the ``file:line`` where the action's body is now suspended, if it runs."""
         if self._coro is None or self._phase is not RUNNING:
@@ -639,7 +655,7 @@ class ActionHandle(Generic[T]):
         newly.reverse()
         executive = self._executive
         executive.froze(self, newly, reason, by)
-        run_hooks(newly, Hook.PAUSE, executive.owner, executive.log)  # type: ignore[arg-type]
+        run_hooks(newly, Hook.PAUSE, executive.owner, executive.log)
 
     def _thawed(self) -> None:
         """Thaw what in this subtree nothing freezes any more (parents first), after a resume."""
@@ -652,7 +668,7 @@ class ActionHandle(Generic[T]):
                 thawed.append(node)
         executive = self._executive
         executive.thawed(self, thawed)
-        run_hooks(thawed, Hook.RESUME, executive.owner, executive.log)  # type: ignore[arg-type]
+        run_hooks(thawed, Hook.RESUME, executive.owner, executive.log)
 
     def _subtree(self) -> list[ActionHandle[Any]]:
         """This action and its descendants that may freeze (parents first).
@@ -719,12 +735,17 @@ class ActionHandle(Generic[T]):
         self._callbacks = kept
         return removed
 
-    def _on_done(self, callback: Callable[[ActionHandle[T]], object]) -> None:
-        """Call ``callback(handle)`` synchronously when done, before the done-callbacks.
+    def on_done(self, callback: Callable[[ActionHandle[T]], object]) -> None:
+        """Call ``callback(handle)`` as the action becomes done, before the done-callbacks.
 
-        For the library's own bookkeeping (waiting for several actions, resource
-        records, monitor callbacks in flight); the action must not be done yet.
+        The library's own bookkeeping (waiting for several actions, monitor
+        callbacks in flight) uses it; programs use `add_done_callback`. It is
+        called synchronously, at once if the action is done already; an
+        exception in it is logged.
         """
+        if self._phase is DONE:
+            _call_back(callback, self)
+            return
         if self._internal is None:
             self._internal = []
         self._internal.append(callback)
@@ -917,7 +938,7 @@ def all_done(
     countdown = Countdown(loop, len(pending))
     tick = countdown.tick
     for handle in pending:
-        handle._on_done(tick)
+        handle.on_done(tick)
     return countdown.future
 
 

@@ -16,7 +16,9 @@ its task waits on. The handle walks its subtree and writes these through the
 `Freeze` methods; an action that never froze pays one ``is None`` test per
 resumption. Pause hooks (``@action(on_pause=..., on_resume=...)``) are called
 with the robot when the action freezes and thaws: motion actions stop the
-wheels there.
+wheels there. `Stepped` and `run_hooks` read the handle's freeze, loop and
+hooks themselves: they are the handle's own machinery, apart only to keep
+``_handle.py`` readable, and write nothing of it.
 """
 
 from __future__ import annotations
@@ -24,12 +26,13 @@ from __future__ import annotations
 import asyncio
 import enum
 import inspect
-from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 if TYPE_CHECKING:
     from collections.abc import Callable, Coroutine, Generator
 
     from .._core._logging import ScopedLogger
+    from ._handle import ActionHandle
 
 T = TypeVar("T")
 
@@ -109,22 +112,6 @@ class Freeze:
         return thaw
 
 
-class Frozen(Protocol):
-    """What the trampoline and the hooks read of an action (`ActionHandle` fits)."""
-
-    _freeze: Freeze | None
-    _loop: asyncio.AbstractEventLoop
-    _hooks: Hooks | None
-
-    @property
-    def id(self) -> int:
-        """The action's id, for log messages."""
-
-    @property
-    def name(self) -> str:
-        """The action's name, for log messages."""
-
-
 Hooks = tuple["Callable[[Any], object] | None", "Callable[[Any], object] | None"]
 """An action's pause and resume hooks, each called with the robot (or None)."""
 
@@ -151,7 +138,7 @@ class Stepped(Generic[T]):
     __slots__ = ("_coro", "_handle", "_held", "_thawing")
 
     def __init__(
-        self, handle: Frozen, coro: Coroutine[Any, Any, T], yielded: Any = _NOTHING
+        self, handle: ActionHandle[T], coro: Coroutine[Any, Any, T], yielded: Any = _NOTHING
     ) -> None:
         self._handle = handle
         self._coro = coro
@@ -220,7 +207,7 @@ class Hook(enum.Enum):
     RESUME = "resume"
 
 
-def run_hooks(nodes: list[Frozen], hook: Hook, robot: object, log: ScopedLogger) -> None:
+def run_hooks(nodes: list[ActionHandle[Any]], hook: Hook, robot: object, log: ScopedLogger) -> None:
     """Call each node's ``hook`` with ``robot``; log what fails (an async hook runs on its own)."""
     index = 0 if hook is Hook.PAUSE else 1
     for node in nodes:
@@ -237,7 +224,9 @@ def run_hooks(nodes: list[Frozen], hook: Hook, robot: object, log: ScopedLogger)
             _follow(node, hook, asyncio.ensure_future(result, loop=node._loop), log)
 
 
-def _follow(node: Frozen, hook: Hook, task: asyncio.Future[Any], log: ScopedLogger) -> None:
+def _follow(
+    node: ActionHandle[Any], hook: Hook, task: asyncio.Future[Any], log: ScopedLogger
+) -> None:
     """Log the failure of an async hook (it runs on its own; nothing waits for it)."""
 
     def done(fut: asyncio.Future[Any]) -> None:

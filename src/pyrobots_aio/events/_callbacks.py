@@ -178,7 +178,7 @@ class CallbackRunner:
     def _keep(self, handle: ActionHandle[Any]) -> None:
         """Count ``handle`` as a callback in flight until the action is done."""
         self._actions.add(handle)
-        handle._on_done(self._action_done)
+        handle.on_done(self._action_done)
 
     def _call_plain(self, callback: Callback) -> None:
         self._calls.popleft()

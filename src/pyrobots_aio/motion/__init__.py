@@ -12,8 +12,8 @@ once against it, so the same behaviour runs on each, stall detection
 close to their goal they stop, and `WHEELS` is the resource they hold.
 """
 
+from ..poses import Pose2D as Pose2D
 from ._backend import DriveBackend as DriveBackend
-from ._backend import Pose2D as Pose2D
 from ._base import ANGLE_TOLERANCE as ANGLE_TOLERANCE
 from ._base import DISTANCE_TOLERANCE as DISTANCE_TOLERANCE
 from ._base import WHEELS as WHEELS

@@ -9,11 +9,8 @@ from ..robot import Backend
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from ..poses import FrameProvider
+    from ..poses import FrameProvider, Pose2D
     from ._sensors import Sensor
-
-Pose2D = tuple[float, float, float]
-"""A planar pose ``(x, y, yaw)``, in metres and radians."""
 
 
 @runtime_checkable

@@ -31,8 +31,8 @@ from ._stall import STALL_TIMEOUT, StallWatch
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from ..poses import PoseLike
-    from ._backend import DriveBackend, Pose2D
+    from ..poses import Pose2D, PoseLike
+    from ._backend import DriveBackend
     from ._sensors import Sensor
     from ._stall import Velocity
 

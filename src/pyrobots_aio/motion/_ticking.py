@@ -30,9 +30,8 @@ from ._control import Controllers
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from ..poses import FrameProvider
+    from ..poses import FrameProvider, Pose2D
     from ..robot import Robot
-    from ._backend import Pose2D
     from ._sensors import Sensor
 
 TICKS_PER_TURN = 10

@@ -11,13 +11,17 @@ simulator's provider, anything with ``get_transform(frame)`` and
 from ._frames import FrameProvider as FrameProvider
 from ._frames import FrameTree as FrameTree
 from ._manager import PoseManager as PoseManager
+from ._math import Matrix as Matrix
+from ._math import Pose2D as Pose2D
 from ._parse import PoseLike as PoseLike
 from ._pose import Pose as Pose
 
 __all__ = [
     "FrameProvider",
     "FrameTree",
+    "Matrix",
     "Pose",
+    "Pose2D",
     "PoseLike",
     "PoseManager",
 ]

@@ -22,6 +22,9 @@ from .._exceptions import InvalidPoseError
 Matrix: TypeAlias = NDArray[np.float64]
 """A 4x4 homogeneous rigid transform (float64)."""
 
+Pose2D: TypeAlias = tuple[float, float, float]
+"""A planar pose ``(x, y, yaw)``, in metres and radians (a base's odometry, a robot on a map)."""
+
 UNIT_TOLERANCE = 1e-3
 """How far from 1 a quaternion's norm, or ``R @ R.T`` from the identity, may be."""
 

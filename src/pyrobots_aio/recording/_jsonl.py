@@ -36,8 +36,8 @@ import os
 from typing import IO, TYPE_CHECKING, Any
 
 from pyrobots_aio import EventKind, RecordingError
-from pyrobots_aio.telemetry import finite as _finite
-from pyrobots_aio.telemetry import jsonable as _jsonable
+from pyrobots_aio.lowlevel import jsonable as _jsonable
+from pyrobots_aio.lowlevel import null_nonfinite as _null_nonfinite
 
 from ._recorder import Recorder, RecordingOptions
 
@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Collection, Mapping
 
     from pyrobots_aio import ExecEvent
-    from pyrobots_aio.telemetry import Pose2D
+    from pyrobots_aio.poses import Pose2D
 
     from ._recording import RecordingHeader
 
@@ -59,7 +59,7 @@ def _strict(encode: Callable[[Any], str]) -> Callable[[Any], str]:
         try:
             return encode(value)
         except ValueError:  # "Out of range float values are not JSON compliant"
-            return encode(_finite(value))
+            return encode(_null_nonfinite(value))
 
     return strict
 

@@ -28,13 +28,15 @@ import itertools
 import math
 from array import array
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from pyrobots_aio.telemetry import FloorShape
 
 from . import _svg
 from ._svg import esc
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Mapping, Sequence
+    from collections.abc import Iterable, Sequence
 
     from ._analysis import Analysis
     from ._recording import PoseTrack, Recording
@@ -68,13 +70,6 @@ class Mark:
     text: str
 
 
-def _number(value: object) -> float | None:
-    """``value`` as a float within `REACH`, else None."""
-    if isinstance(value, int | float) and not isinstance(value, bool) and abs(value) <= REACH:
-        return float(value)
-    return None
-
-
 def _within_reach(poses: PoseTrack) -> PoseTrack:
     """``poses`` with each coordinate brought within `REACH` of the origin, each yaw within ±pi."""
 
@@ -85,46 +80,34 @@ def _within_reach(poses: PoseTrack) -> PoseTrack:
     return replace(poses, x=near(poses.x), y=near(poses.y), yaw=yaw)
 
 
-def _shape(raw: Mapping[str, Any]) -> dict[str, Any] | None:
-    """A floor-plan shape with checked numbers, or None if it is malformed."""
-    x, y, yaw = _number(raw.get("x")), _number(raw.get("y")), _number(raw.get("yaw", 0.0))
-    if x is None or y is None or yaw is None:
-        return None
-    shape: dict[str, Any] = {"x": x, "y": y, "yaw": yaw, "name": str(raw.get("name", "?"))}
-    shape["kind"] = str(raw.get("kind", "obstacle"))
-    half = raw.get("half")
-    radius = _number(raw.get("radius"))
-    if raw.get("shape") == "box" and isinstance(half, list) and len(half) == 2:
-        hx, hy = _number(half[0]), _number(half[1])
-        if hx is None or hy is None:
-            return None
-        c, s = math.cos(yaw), math.sin(yaw)
-        shape["corners"] = [
-            (x + c * dx - s * dy, y + s * dx + c * dy)
-            for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
-        ]
-    elif radius is not None and radius >= 0:
-        shape["radius"] = radius
-    else:
-        return None
-    rgba = raw.get("rgba")
-    values = [_number(v) for v in rgba] if isinstance(rgba, list) and len(rgba) == 4 else []
-    channels = [v for v in values[:3] if v is not None]
-    if len(values) == 4 and len(channels) == 3:
-        r, g, b = (round(255 * min(1.0, max(0.0, v))) for v in channels)
-        shape["fill"] = f"#{r:02x}{g:02x}{b:02x}"
-    return shape
+def _reachable(shape: FloorShape) -> bool:
+    """Whether ``shape`` lies within `REACH` of the origin (else it is left out)."""
+    sizes = shape.half if shape.half is not None else (shape.radius or 0.0,)
+    return all(abs(v) <= REACH for v in (shape.x, shape.y, *sizes))
 
 
-def _extent(shapes: Sequence[dict[str, Any]], recording: Recording) -> tuple[float, ...] | None:
+def _corners(shape: FloorShape) -> list[tuple[float, float]] | None:
+    """The corners of a box, in ``map``; None for a circle."""
+    if shape.half is None:
+        return None
+    (hx, hy), c, s = shape.half, math.cos(shape.yaw), math.sin(shape.yaw)
+    return [
+        (shape.x + c * dx - s * dy, shape.y + s * dx + c * dy)
+        for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
+    ]
+
+
+def _extent(shapes: Sequence[FloorShape], recording: Recording) -> tuple[float, ...] | None:
     xs, ys = list(recording.poses.x), list(recording.poses.y)
     for shape in shapes:
-        if "corners" in shape:
-            xs += [c[0] for c in shape["corners"]]
-            ys += [c[1] for c in shape["corners"]]
+        corners = _corners(shape)
+        if corners is not None:
+            xs += [c[0] for c in corners]
+            ys += [c[1] for c in corners]
         else:
-            xs += [shape["x"] - shape["radius"], shape["x"] + shape["radius"]]
-            ys += [shape["y"] - shape["radius"], shape["y"] + shape["radius"]]
+            radius = shape.radius or 0.0
+            xs += [shape.x - radius, shape.x + radius]
+            ys += [shape.y - radius, shape.y + radius]
     if not xs:
         return None
     return min(xs), min(ys), max(xs), max(ys)
@@ -146,17 +129,23 @@ class _Frame:
         return self.ox + x * self.scale, self.oy - y * self.scale
 
 
-def _draw_shape(frame: _Frame, shape: dict[str, Any]) -> str:
-    kind = _svg.css_class(shape["kind"], "obstacle")
-    fill = f' style="fill:{shape["fill"]}"' if "fill" in shape else ""
-    title = f"<title>{esc(shape['name'])} ({esc(shape['kind'])})</title>"
-    if "corners" in shape:
-        points = " ".join(
-            f"{px:.1f},{py:.1f}" for px, py in (frame.px(*c) for c in shape["corners"])
-        )
+def _fill(shape: FloorShape) -> str:
+    """The style attribute giving ``shape`` its colour, if it has one."""
+    if shape.rgba is None:
+        return ""
+    r, g, b = (round(255 * min(1.0, max(0.0, v))) for v in shape.rgba[:3])
+    return f' style="fill:#{r:02x}{g:02x}{b:02x}"'
+
+
+def _draw_shape(frame: _Frame, shape: FloorShape) -> str:
+    kind, fill = _svg.css_class(shape.kind, "obstacle"), _fill(shape)
+    title = f"<title>{esc(shape.name)} ({esc(shape.kind)})</title>"
+    corners = _corners(shape)
+    if corners is not None:
+        points = " ".join(f"{px:.1f},{py:.1f}" for px, py in (frame.px(*c) for c in corners))
         return f'<polygon class="shape {kind}" points="{points}"{fill}>{title}</polygon>'
-    cx, cy = frame.px(shape["x"], shape["y"])
-    r = shape["radius"] * frame.scale
+    cx, cy = frame.px(shape.x, shape.y)
+    r = (shape.radius or 0.0) * frame.scale
     circle = f'<circle class="shape {kind}" cx="{cx:.1f}" cy="{cy:.1f}" r="{r:.1f}"'
     return f"{circle}{fill}>{title}</circle>"
 
@@ -399,7 +388,7 @@ def _track(recording: Recording, kept: list[int]) -> str:
 
 def render_map(recording: Recording, found: Analysis) -> str:
     """The map's SVG, or "" when the recording has neither a floor plan nor poses."""
-    shapes = [s for raw in recording.header.floor_plan if (s := _shape(raw)) is not None]
+    shapes = [s for s in FloorShape.read_plan(recording.header.floor_plan) if _reachable(s)]
     recording = replace(recording, poses=_within_reach(recording.poses))
     extent = _extent(shapes, recording)
     if extent is None:

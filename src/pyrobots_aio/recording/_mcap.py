@@ -24,13 +24,13 @@ import os
 from typing import TYPE_CHECKING, Any
 
 from pyrobots_aio import RecordingError
+from pyrobots_aio.lowlevel import strict_json
 from pyrobots_aio.telemetry import (
     FIXED_CHANNELS,
     SCHEMAS,
     FoxgloveChannels,
     LogForwarder,
     Message,
-    strict_json,
 )
 
 from ._recorder import Recorder, RecordingOptions
@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from mcap.writer import Writer
 
     from pyrobots_aio import ExecEvent
-    from pyrobots_aio.telemetry import Pose2D
+    from pyrobots_aio.poses import Pose2D
 
     from ._recording import RecordingHeader
 

@@ -11,7 +11,7 @@ if TYPE_CHECKING:
     from collections.abc import Collection, Mapping
 
     from pyrobots_aio import ExecEvent
-    from pyrobots_aio.telemetry import Pose2D
+    from pyrobots_aio.poses import Pose2D
 
 
 class MemorySink:

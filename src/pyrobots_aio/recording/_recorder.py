@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from collections.abc import Collection, Mapping
 
     from pyrobots_aio import ExecEvent, Robot
-    from pyrobots_aio.telemetry import Pose2D
+    from pyrobots_aio.poses import Pose2D
 
 _log = logging.getLogger("pyrobots_aio.recording")
 

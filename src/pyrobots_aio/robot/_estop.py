@@ -40,7 +40,7 @@ class EmergencyStop:
     """The emergency stop of a `Robot` (a mixin: `Robot` is the class to use)."""
 
     state: StateStore
-    _executive: Executive
+    executive: Executive
     _estop_reason: str | None = None
     _estop_callbacks: dict[StopCallback, None] | None = None  # an ordered set, made at first use
 
@@ -107,7 +107,7 @@ class EmergencyStop:
             >>> run(main)
             ('emergency stop: operator', True)
         """
-        executive = self._executive
+        executive = self.executive
         executive.check_loop("emergency stop")
         if self._estop_reason is None:
             self._estop_reason = reason
@@ -177,18 +177,18 @@ class EmergencyStop:
             EventLoopError: Called from another thread while the robot runs (use
                 ``robot.call_soon_threadsafe(robot.clear_emergency_stop)``).
         """
-        if self._executive.is_running:  # (the latch outlives a run: clearing it between is fine)
-            self._executive.check_loop("clear the emergency stop")
+        if self.executive.is_running:  # (the latch outlives a run: clearing it between is fine)
+            self.executive.check_loop("clear the emergency stop")
         if self._estop_reason is None:
             return
-        log = self._executive.log_scope.logger("pyrobots_aio.robot")
+        log = self.executive.log_scope.logger("pyrobots_aio.robot")
         log.info("emergency stop cleared (it was: %s)", self._estop_reason)
         self._estop_reason = None
         self.state.update({STOPPED_KEY: False, REASON_KEY: None})
 
     def _to_preempt(self, reason: str, log: ScopedLogger) -> list[ActionHandle[Any]]:
         """Every action holding or awaiting a resource, then those the callbacks hand over."""
-        preempted = dict.fromkeys(h for h in self._executive.running() if h.held or h.awaiting)
+        preempted = dict.fromkeys(h for h in self.executive.running() if h.held or h.awaiting)
         for callback in tuple(self._estop_callbacks or ()):
             try:
                 preempted.update(dict.fromkeys(callback(reason)))
@@ -203,8 +203,13 @@ class EmergencyStop:
 
 
 def _cancel(holders: list[ActionHandle[Any]], reason: str, by: ActionHandle[Any] | None) -> None:
-    for holder in holders:
-        holder._cancel_subtree(reason, by)  # on behalf of the stop: by it, not by the caller
+    """Cancel ``holders`` on behalf of ``by`` (the stop's action), not of the caller."""
+    token = current_action.set(by)  # the canceller `cancel` records: the action running now
+    try:
+        for holder in holders:
+            holder.cancel(reason)
+    finally:
+        current_action.reset(token)
 
 
 async def _wait_until_done(executive: Executive, holders: list[ActionHandle[Any]]) -> None:

@@ -50,8 +50,8 @@ def blocking_action(
     if task is None:
         return None
     for handle in handles:
-        if handle._task is task:
-            body = getattr(handle._coro, "cr_frame", None)  # where to look for the culprit line
+        if handle.runs_in(task):
+            body = handle.body_frame()  # where to look for the culprit line
             return Blocker(f"action {handle.name}#{handle.id}", handle.id, handle.name, body)
     return None
 

@@ -129,7 +129,9 @@ class Robot(StateMethods, EmergencyStop):
             self.instruments.add(instrument)
         self._log_scope = LogScope()
         self.resources: ResourceManager[ActionHandle[Any]] = ResourceManager(self.instruments)
-        self._executive = Executive(
+        # Runs the robot's actions; ``@action`` finds it here (the library's to call, not a
+        # program's: public only for the layers above, as `actions._decorator.Runner` says).
+        self.executive = Executive(
             self,
             resources=self.resources,
             max_actions=max_actions,
@@ -138,7 +140,7 @@ class Robot(StateMethods, EmergencyStop):
             log=self._log_scope,
         )
         self._state = StateStore()
-        self.events = EventManager(self, self._state, self._executive, self.instruments)
+        self.events = EventManager(self, self._state, self.executive, self.instruments)
         self.poses = PoseManager()
         self._backend = backend
         self.live = serve if isinstance(serve, LiveView) or serve is None else LiveView(serve)
@@ -215,10 +217,10 @@ class Robot(StateMethods, EmergencyStop):
     @property
     def is_running(self) -> bool:
         """Whether the robot is running (inside ``async with robot``)."""
-        return self._executive.is_running
+        return self.executive.is_running
 
     async def __aenter__(self) -> Self:
-        if self._executive.is_running:
+        if self.executive.is_running:
             msg = f"{self!r} is already running; enter 'async with robot:' once at a time"
             raise PyRobotsError(msg)
         loop = current_loop()
@@ -258,7 +260,7 @@ class Robot(StateMethods, EmergencyStop):
         stack.callback(self._close_workers)
         self._state.bind(loop)
         stack.callback(self._state.bind, None)
-        self._executive.open(loop)
+        self.executive.open(loop)
         stack.push_async_callback(self._close_actions)  # if a start fails (a run closed it above)
         if self.live is not None:
             self.live.start(self)
@@ -278,8 +280,8 @@ class Robot(StateMethods, EmergencyStop):
 
     async def _close_actions(self) -> None:
         """Cancel every action and wait for them; no new root action starts from here on."""
-        if self._executive.is_running:
-            await self._executive.close(SHUTDOWN_REASON)
+        if self.executive.is_running:
+            await self.executive.close(SHUTDOWN_REASON)
 
     @property
     def backend(self) -> Backend | None:
@@ -342,7 +344,7 @@ class Robot(StateMethods, EmergencyStop):
         Raises:
             RobotNotRunningError: The robot is not running.
         """
-        self._executive.loop.call_soon_threadsafe(fn, *args)
+        self.executive.loop.call_soon_threadsafe(fn, *args)
 
     def run_threadsafe(self, coro: Coroutine[Any, Any, T]) -> concurrent.futures.Future[T]:
         """Run ``coro`` on the robot's loop from another thread; return a concurrent Future.
@@ -374,7 +376,7 @@ class Robot(StateMethods, EmergencyStop):
             >>> asyncio.run(main())
             'busy'
         """
-        loop = self._executive.loop
+        loop = self.executive.loop
         if current_loop() is loop:
             coro.close()
             msg = (
@@ -392,7 +394,7 @@ class Robot(StateMethods, EmergencyStop):
         return self._block_threshold
 
     def _watch_loop(self, loop: asyncio.AbstractEventLoop, threshold: float) -> None:
-        executive = self._executive
+        executive = self.executive
         self._blockwatch = BlockWatch(
             loop,
             threshold,
@@ -451,7 +453,7 @@ class Robot(StateMethods, EmergencyStop):
             >>> asyncio.run(main())
             0.01
         """
-        loop = self._executive.check_loop("call robot.to_thread")
+        loop = self.executive.check_loop("call robot.to_thread")
         if self._workers is None:
             self._workers = Workers(self._log_scope.logger("pyrobots_aio.robot"))
         return await self._workers.run(loop, fn, *args)
@@ -476,10 +478,10 @@ class Robot(StateMethods, EmergencyStop):
         if seconds != math.inf:  # sleep(math.inf) sleeps until cancelled, as asyncio's does
             seconds = finite("seconds", seconds, must="a number of seconds (or math.inf)")
         handle = current_action.get()
-        if handle is None or handle._executive is not self._executive:
+        if handle is None or self.executive.get(handle.id) is not handle:  # not one of ours
             await asyncio.sleep(seconds)
             return
-        loop = self._executive.loop
+        loop = self.executive.loop
         start, frozen_before = loop.time(), handle.frozen_time()
         await asyncio.sleep(seconds)  # one timer, unless the action was frozen meanwhile
         while (frozen := handle.frozen_time() - frozen_before) > 0:
@@ -496,8 +498,8 @@ class Robot(StateMethods, EmergencyStop):
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(robot.pause_all, reason)``).
         """
-        self._executive.check_loop("call robot.pause_all")
-        self._executive.pause_all(reason)
+        self.executive.check_loop("call robot.pause_all")
+        self.executive.pause_all(reason)
 
     def resume_all(self) -> None:
         """Resume every paused action.
@@ -507,21 +509,21 @@ class Robot(StateMethods, EmergencyStop):
             EventLoopError: Called from another thread (use
                 ``robot.call_soon_threadsafe(robot.resume_all)``).
         """
-        self._executive.check_loop("call robot.resume_all")
-        self._executive.resume_all()
+        self.executive.check_loop("call robot.resume_all")
+        self.executive.resume_all()
 
     def time(self) -> float:
         """The robot's clock: the running loop's time (simulation time in lockstep)."""
-        return self._executive.loop.time()
+        return self.executive.loop.time()
 
     async def cancel_all(self, reason: str | None = None) -> None:
         """Cancel every running action and return once they are all done."""
-        await self._executive.cancel_all(reason)
+        await self.executive.cancel_all(reason)
 
     async def cancel_all_others(self, reason: str | None = None) -> None:
         """Cancel every action except the calling one and its ancestors; wait for them."""
         me = current_action.get()
-        await self._executive.cancel_all(reason, keep=() if me is None else (me,))
+        await self.executive.cancel_all(reason, keep=() if me is None else (me,))
 
     def running(self) -> list[ActionInfo]:
         """Snapshots of every action not yet done, in start order.
@@ -530,7 +532,7 @@ class Robot(StateMethods, EmergencyStop):
         read from the action's coroutine only when asked.
         """
         snapshot = ActionInfo.of
-        return [snapshot(h) for h in self._executive.running()]
+        return [snapshot(h) for h in self.executive.running()]
 
     def actioninfo(self, ident: int) -> ActionInfo:
         """The snapshot of the running action with this id.
@@ -538,20 +540,20 @@ class Robot(StateMethods, EmergencyStop):
         Raises:
             ActionError: No running action has this id.
         """
-        handle = self._executive.get(ident)
+        handle = self.executive.get(ident)
         if handle is None:
-            running = [h.id for h in self._executive.running()]
+            running = [h.id for h in self.executive.running()]
             msg = f"no running action with id {ident!r}; running ids: {running[:20]}"
             raise ActionError(msg)
         return ActionInfo.of(handle)
 
     def action_tree(self) -> str:
         """The running actions as a printable tree (children indented under parents)."""
-        return _render_tree(self._executive.roots())
+        return _render_tree(self.executive.roots())
 
     def handles(self) -> list[ActionHandle[Any]]:
         """The handles of every action not yet done, in start order."""
-        return self._executive.running()
+        return self.executive.running()
 
     # -- logging ----------------------------------------------------------
 

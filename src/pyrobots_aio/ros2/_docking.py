@@ -20,8 +20,8 @@ from typing import Any
 
 from .._exceptions import ActionInterrupted, MotionError
 from ..actions import ActionHandle, action, lock
+from ..lowlevel import park
 from ..motion import WHEELS, DriveBase
-from ..motion._base import park
 from ._create3 import CREATE3, CREATE3_ACTIONS, create3_action
 
 __all__ = ["ProfileDocking"]

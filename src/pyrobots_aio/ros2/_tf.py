@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from collections.abc import Collection, Iterable
 
     from ..motion import Pose2D
-    from ..poses._math import Matrix
+    from ..poses import Matrix
     from ._node import Ros2Node
     from ._topics import Ros2Publisher
 

@@ -17,9 +17,9 @@ from __future__ import annotations
 import asyncio
 from typing import cast
 
-from .._core._numbers import finite
 from .._exceptions import LockstepError
 from ..loops import VirtualTimeLoop, is_virtual
+from ..lowlevel import finite
 from ..motion import TickingBackend
 from ._frames import WorldFrames
 from ._world import SimWorld

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ..motion._math import wrap_angle
+from ..lowlevel import wrap_angle
 
 __all__ = ["Odometry"]
 

@@ -41,8 +41,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from .. import SimulationUnavailableError, UnknownFrameError
-from .._core._numbers import finite
-from ..motion._math import limit_speeds
+from ..lowlevel import finite, limit_speeds
 from ._models import ModelLayout
 from ._models import model_path as _default_model_path
 from ._odometry import Odometry

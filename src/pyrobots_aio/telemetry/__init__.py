@@ -1,9 +1,10 @@
 """Telemetry: the Foxglove channels of a run, state sampling, and the live view.
 
 - `FoxgloveChannels` turns the executive's events, state samples, the pose,
-  log records and a simulated world's arena (`floor_plan`) into the messages
-  of the Foxglove channels (`FIXED_CHANNELS`, `ARENA`, schemas in `SCHEMAS`,
-  strict JSON);
+  log records and a simulated world's arena (`floor_plan`, read as
+  `FloorShape` values, as the replay page's map reads it) into the messages of
+  the Foxglove channels (`FIXED_CHANNELS`, `ARENA`, schemas in `SCHEMAS`,
+  strict JSON: `pyrobots_aio.lowlevel.strict_json`);
 - `StateSampler` passes on what each write of a robot's state brings;
 - `LiveView` serves those channels over Foxglove's WebSocket protocol while a
   robot runs (``Robot(serve=PORT)``).
@@ -19,6 +20,7 @@ live view, so it imports telemetry; telemetry reads the robot only through
 
 from ._arena import ARENA as ARENA
 from ._arena import SCENE_UPDATE as SCENE_UPDATE
+from ._arena import FloorShape as FloorShape
 from ._arena import floor_plan as floor_plan
 from ._channels import EVENT as EVENT
 from ._channels import FIXED_CHANNELS as FIXED_CHANNELS
@@ -28,11 +30,7 @@ from ._channels import SCHEMAS as SCHEMAS
 from ._channels import FoxgloveChannels as FoxgloveChannels
 from ._channels import LogForwarder as LogForwarder
 from ._channels import Message as Message
-from ._channels import finite as finite
-from ._channels import jsonable as jsonable
-from ._channels import strict_json as strict_json
 from ._live import LiveView as LiveView
-from ._sampling import Pose2D as Pose2D
 from ._sampling import StateSampler as StateSampler
 from ._source import TelemetrySource as TelemetrySource
 
@@ -44,15 +42,12 @@ __all__ = [
     "SAMPLE",
     "SCENE_UPDATE",
     "SCHEMAS",
+    "FloorShape",
     "FoxgloveChannels",
     "LiveView",
     "LogForwarder",
     "Message",
-    "Pose2D",
     "StateSampler",
     "TelemetrySource",
-    "finite",
     "floor_plan",
-    "jsonable",
-    "strict_json",
 ]

@@ -10,15 +10,24 @@ whole run.
 
 from __future__ import annotations
 
-import math
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
+from .._core._numbers import as_float
 from ._wellknown import POSE, TIME, VECTOR3, numbers, planar_pose, stamp
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Mapping
+    from collections.abc import Iterable
 
-__all__ = ["ARENA", "SCENE_UPDATE", "SCENE_UPDATE_SCHEMA", "floor_plan", "scene_update"]
+__all__ = [
+    "ARENA",
+    "SCENE_UPDATE",
+    "SCENE_UPDATE_SCHEMA",
+    "FloorShape",
+    "floor_plan",
+    "scene_update",
+]
 
 ARENA = "/pyrobots/arena"
 """The topic of the arena's scene."""
@@ -92,66 +101,127 @@ def floor_plan(robot: object) -> list[dict[str, Any]]:
     return list(plan()) if callable(plan) else []
 
 
-def _finite(value: object, default: float) -> float:
-    """``value`` if it is a finite number, else ``default``."""
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    return float(value) if ok else default  # type: ignore[arg-type]
+@dataclass(frozen=True, slots=True)
+class FloorShape:
+    """One static shape of a world's floor plan, seen from above, in ``map`` (metres, radians).
+
+    A floor plan is a list of JSON-friendly dicts (`floor_plan`,
+    ``SimWorld.floor_plan``, a recording's header); `read_plan` reads it, once
+    for every one who draws it (Foxglove's 3D panel, the replay page's map).
+    A box has `half`, a circle its `radius`: exactly one of them is set.
+
+    Examples:
+        >>> plan = [{"x": 0}, {"name": "crate", "shape": "box", "x": 1, "y": 2, "half": [0.5, 0.1]}]
+        >>> [(s.name, s.kind, s.half, s.radius, s.z) for s in FloorShape.read_plan(plan)]
+        [('crate', 'obstacle', (0.5, 0.1), None, 0.05)]
+    """
+
+    name: str
+    kind: str
+    """What it is: its material's name in the shipped arena (``wall``, ``obstacle``, ``dock``)."""
+    x: float
+    y: float
+    yaw: float
+    half: tuple[float, float] | None
+    """A box's half sides along its own x and y; None for a circle."""
+    radius: float | None
+    """A circle's radius; None for a box."""
+    rgba: tuple[float, float, float, float] | None
+    """Its colour (0 to 1 each), if the plan gives one."""
+    height: float
+    """How tall it stands (`DEFAULT_HEIGHT` if the plan does not say)."""
+    z: float
+    """The height of its centre (half its height if the plan does not say)."""
+
+    def __post_init__(self) -> None:
+        if (self.half is None) == (self.radius is None):
+            msg = (
+                f"a floor shape is a box or a circle, got half={self.half!r} and "
+                f"radius={self.radius!r}; give exactly one of them"
+            )
+            raise ValueError(msg)
+
+    @classmethod
+    def read(cls, raw: object, index: int = 0) -> FloorShape | None:
+        """The shape a floor plan's ``index``-th dict describes, or None if it is malformed.
+
+        It must give finite numbers ``x`` and ``y`` (``yaw``: 0 if absent), and
+        ``shape``: ``"box"`` with ``half`` ``[hx, hy]``, or ``"circle"`` with a
+        ``radius`` of 0 or more. A name defaults to ``shape<index>``, a kind to
+        ``obstacle``; an ``rgba`` that is not four finite numbers is left out.
+        """
+        if not isinstance(raw, Mapping):
+            return None
+        x, y, yaw = as_float(raw.get("x")), as_float(raw.get("y")), as_float(raw.get("yaw", 0.0))
+        half, radius = _numbers(raw.get("half"), 2), as_float(raw.get("radius"))
+        box = raw.get("shape") == "box" and half is not None
+        circle = raw.get("shape") == "circle" and radius is not None and radius >= 0
+        if x is None or y is None or yaw is None or not (box or circle):
+            return None
+        height = as_float(raw.get("height"))
+        height = DEFAULT_HEIGHT if height is None else height
+        z = as_float(raw.get("z"))
+        rgba = _numbers(raw.get("rgba"), 4)
+        return cls(
+            name=str(raw.get("name", f"shape{index}")),
+            kind=str(raw.get("kind", "obstacle")),
+            x=x, y=y, yaw=yaw,
+            half=(half[0], half[1]) if box and half is not None else None,
+            radius=radius if not box else None,
+            rgba=(rgba[0], rgba[1], rgba[2], rgba[3]) if rgba is not None else None,
+            height=height,
+            z=height / 2 if z is None else z,
+        )  # fmt: skip
+
+    @classmethod
+    def read_plan(cls, plan: Iterable[object]) -> list[FloorShape]:
+        """Every well-formed shape of ``plan``, in its order (the malformed ones left out)."""
+        return [shape for i, raw in enumerate(plan) if (shape := cls.read(raw, i)) is not None]
 
 
-def _number(shape: Mapping[str, Any], key: str, default: float) -> float:
-    return _finite(shape.get(key), default)
+def _numbers(value: object, count: int) -> list[float] | None:
+    """``value`` as ``count`` finite floats, if it is a list or tuple of that many."""
+    if not isinstance(value, list | tuple) or len(value) != count:
+        return None
+    numbers = [as_float(v) for v in value]
+    return None if None in numbers else cast("list[float]", numbers)
 
 
-def _color(shape: Mapping[str, Any]) -> dict[str, float]:
-    rgba = shape.get("rgba")
-    if not (isinstance(rgba, list) and len(rgba) == 4):
-        rgba = _GREY
-    return {c: _finite(v, grey) for c, v, grey in zip("rgba", rgba, _GREY, strict=True)}
+def _color(shape: FloorShape) -> dict[str, float]:
+    return dict(zip("rgba", shape.rgba or _GREY, strict=True))
 
 
-def _primitive(shape: Mapping[str, Any]) -> tuple[str, dict[str, Any]] | None:
-    """The cube or cylinder of one floor-plan shape (None: neither a box nor a circle)."""
-    height = _number(shape, "height", DEFAULT_HEIGHT)
-    pose = planar_pose(
-        _number(shape, "x", 0.0),
-        _number(shape, "y", 0.0),
-        _number(shape, "z", height / 2),
-        _number(shape, "yaw", 0.0),
-    )
-    half = shape.get("half")
-    if shape.get("shape") == "box" and isinstance(half, list) and len(half) == 2:
-        hx, hy = (_finite(h, 0.0) for h in half)
-        size = {"x": 2 * hx, "y": 2 * hy, "z": height}
+def _primitive(shape: FloorShape) -> tuple[str, dict[str, Any]]:
+    """The cube or cylinder that draws ``shape``."""
+    pose = planar_pose(shape.x, shape.y, shape.z, shape.yaw)
+    if shape.half is not None:
+        hx, hy = shape.half
+        size = {"x": 2 * hx, "y": 2 * hy, "z": shape.height}
         return "cubes", {"pose": pose, "size": size, "color": _color(shape)}
-    if shape.get("shape") == "circle":
-        diameter = 2 * _number(shape, "radius", 0.0)
-        cylinder: dict[str, Any] = {"pose": pose}
-        cylinder["size"] = {"x": diameter, "y": diameter, "z": height}
-        cylinder.update(bottom_scale=1.0, top_scale=1.0, color=_color(shape))
-        return "cylinders", cylinder
-    return None
+    diameter = 2 * (shape.radius or 0.0)
+    cylinder: dict[str, Any] = {"pose": pose}
+    cylinder["size"] = {"x": diameter, "y": diameter, "z": shape.height}
+    cylinder.update(bottom_scale=1.0, top_scale=1.0, color=_color(shape))
+    return "cylinders", cylinder
 
 
-def scene_update(shapes: Iterable[Mapping[str, Any]], log_time: int) -> dict[str, Any]:
-    """The ``foxglove.SceneUpdate`` that draws ``shapes`` (a floor plan) in ``map``, for good.
+def scene_update(plan: Iterable[object], log_time: int) -> dict[str, Any]:
+    """The ``foxglove.SceneUpdate`` that draws a floor ``plan`` in ``map``, for good.
 
-    Each shape is an entity named after it (its ``kind`` in the entity's
-    metadata), stamped ``log_time`` (ns since 1970); a shape that is neither a
-    box nor a circle is left out.
+    Each well-formed shape (`FloorShape.read_plan`) is an entity named after it
+    (its ``kind`` in the entity's metadata), stamped ``log_time`` (ns since 1970).
     """
     entities = []
-    for index, shape in enumerate(shapes):
-        primitive = _primitive(shape)
-        if primitive is None:
-            continue
+    for shape in FloorShape.read_plan(plan):
         entity: dict[str, Any] = {"timestamp": stamp(log_time), "frame_id": "map"}
         entity.update(
-            id=str(shape.get("name", f"shape{index}")),
+            id=shape.name,
             lifetime={"sec": 0, "nsec": 0},  # never expires
             frame_locked=False,
-            metadata=[{"key": "kind", "value": str(shape.get("kind", "obstacle"))}],
+            metadata=[{"key": "kind", "value": shape.kind}],
         )
         entity.update({name: [] for name in _PRIMITIVES})
-        entity[primitive[0]] = [primitive[1]]
+        kind, primitive = _primitive(shape)
+        entity[kind] = [primitive]
         entities.append(entity)
     return {"deletions": [], "entities": entities}

@@ -29,9 +29,7 @@ the machine's monotonic clock, meaningless to a viewer).
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
-import math
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from .._core._events import (
@@ -43,6 +41,7 @@ from .._core._events import (
     MonitorFired,
     ResourcePreempted,
 )
+from .._core._json import strict_json
 from . import _wellknown as wk
 from ._arena import ARENA, SCENE_UPDATE, SCENE_UPDATE_SCHEMA, scene_update
 
@@ -50,7 +49,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Iterable, Mapping
 
     from .._core._events import ExecEvent
-    from ._sampling import Pose2D
+    from ..poses import Pose2D
 
 __all__ = [
     "ACTIONS",
@@ -72,10 +71,7 @@ __all__ = [
     "FoxgloveChannels",
     "LogForwarder",
     "Message",
-    "finite",
-    "jsonable",
     "log_level",
-    "strict_json",
 ]
 
 ACTIONS, RESOURCES, MONITORS = "/pyrobots/actions", "/pyrobots/resources", "/pyrobots/monitors"
@@ -191,41 +187,6 @@ class Message(NamedTuple):
     log_time: int
 
 
-def jsonable(value: object) -> object:
-    """Make what ``json`` cannot encode encodable: numpy values, sets, anything else by repr."""
-    tolist = getattr(value, "tolist", None)  # numpy arrays and scalars
-    if callable(tolist):
-        return tolist()
-    if isinstance(value, set | frozenset | tuple):
-        return list(value)
-    return repr(value)
-
-
-def finite(value: object) -> object:
-    """``value`` with each non-finite float (NaN, Infinity) replaced by None, for strict JSON."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if value is None or isinstance(value, str | int):
-        return value
-    if isinstance(value, dict):
-        return {
-            repr(k) if isinstance(k, float) and not math.isfinite(k) else k: finite(v)
-            for k, v in value.items()
-        }
-    if isinstance(value, list | tuple):
-        return [finite(v) for v in value]
-    return finite(jsonable(value))
-
-
-def strict_json(value: object) -> bytes:
-    """Compact strict JSON, as UTF-8 (NaN and Infinity become null)."""
-    try:
-        text = json.dumps(value, separators=(",", ":"), allow_nan=False, default=jsonable)
-    except ValueError:  # "Out of range float values are not JSON compliant"
-        text = json.dumps(finite(value), separators=(",", ":"), default=jsonable)
-    return text.encode()
-
-
 class FoxgloveChannels:
     """Turns a run's events, samples and log lines into `Message` values.
 
@@ -331,10 +292,10 @@ class FoxgloveChannels:
         body.update(file=file, line=max(0, line))
         return Message(LOG, FOXGLOVE_LOG, strict_json(body), stamp)
 
-    def arena(self, shapes: Iterable[Mapping[str, Any]], log_time: int | None = None) -> Message:
+    def arena(self, plan: Iterable[object], log_time: int | None = None) -> Message:
         """The ``foxglove.SceneUpdate`` drawing a floor plan, at ``log_time`` (None: the start)."""
         stamp = self.origin_ns if log_time is None else log_time
-        return Message(ARENA, SCENE_UPDATE, strict_json(scene_update(shapes, stamp)), stamp)
+        return Message(ARENA, SCENE_UPDATE, strict_json(scene_update(plan, stamp)), stamp)
 
 
 def log_level(levelno: int) -> int:

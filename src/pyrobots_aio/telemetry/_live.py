@@ -27,17 +27,18 @@ import socket
 import time
 from typing import TYPE_CHECKING, Any
 
+from .._core._json import strict_json
 from .._exceptions import PyRobotsError
 from ._arena import ARENA, SCENE_UPDATE, floor_plan
-from ._channels import FIXED_CHANNELS, SCHEMAS, FoxgloveChannels, LogForwarder, strict_json
+from ._channels import FIXED_CHANNELS, SCHEMAS, FoxgloveChannels, LogForwarder
 from ._sampling import StateSampler
 
 if TYPE_CHECKING:
     from types import ModuleType
 
     from .._core._instrument import ExecEvent
+    from ..poses import Pose2D
     from ._channels import Message
-    from ._sampling import Pose2D
     from ._source import TelemetrySource
 
 _log = logging.getLogger("pyrobots_aio.live")

@@ -17,13 +17,12 @@ from .._exceptions import UnknownFrameError
 if TYPE_CHECKING:
     from collections.abc import Callable, Mapping
 
+    from ..poses import Pose2D
     from ..state import Subscription
     from ._source import TelemetrySource
 
-__all__ = ["POSE_EPSILON", "Pose2D", "StateSampler"]
+__all__ = ["POSE_EPSILON", "StateSampler"]
 
-Pose2D = tuple[float, float, float]
-"""``(x, y, yaw)`` in the map frame (metres, radians)."""
 _MISSING = object()
 POSE_EPSILON = 1e-9
 """A pose that moved less than this (metres and radians) is not sampled again."""

@@ -23,9 +23,8 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from .. import UnknownFrameError
-from .._core._numbers import as_float, finite, shown
+from ..lowlevel import as_float, finite, limit_speeds, shown
 from ..motion import SENSORS, DriveBase, SensorKind, TickingBackend
-from ..motion._math import limit_speeds
 
 if TYPE_CHECKING:
     from collections.abc import Collection, Iterable
