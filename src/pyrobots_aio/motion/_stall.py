@@ -77,7 +77,7 @@ class StallWatch:
         self._base, self._handle, self._name = base, handle, name
         self._frozen = self._frozen_time()
         self._command: Velocity = (0.0, 0.0)  # what the wheels were told at the last tick
-        self._restart()
+        self._restart(*base.odom_pose())
 
     def thawed(self) -> bool:
         """Whether the action was frozen since the last tick (the watch then starts afresh)."""
@@ -104,7 +104,7 @@ class StallWatch:
         self._turned += wrap_angle(yaw - self._yaw)
         self._yaw, self._command = yaw, command
         if not (v or w) or self._progressed(math.hypot(x - self._start[0], y - self._start[1])):
-            self._restart()
+            self._restart(x, y, yaw)
             return
         self._stalled += period
         if self._stalled + _SLACK >= self._base.stall_timeout:
@@ -116,9 +116,9 @@ class StallWatch:
             turn > 0 and abs(self._turned) >= min(STALL_TURN, _SHARE * turn)
         )
 
-    def _restart(self) -> None:
-        """Look for progress from here on."""
-        x, y, self._yaw = self._base.odom_pose()
+    def _restart(self, x: float, y: float, yaw: float) -> None:
+        """Look for progress from here, the odometry's pose ``(x, y, yaw)``."""
+        self._yaw = yaw
         self._start, self._stalled, self._commanded, self._turned = (x, y), 0.0, (0.0, 0.0), 0.0
 
     def _frozen_time(self) -> float:

@@ -41,6 +41,8 @@ TOP_WHEEL_SPEED = 0.306
 """Metres per second: the fastest a wheel turns (the simulator's, a Create 3's)."""
 _IR_RADIUS = 0.165  # metres from the centre: where the range sensors' rays start
 _CONTACT = 1e-6  # metres: closer than this to a box counts as touching it
+_FLAGS = ("bumper", "bumper_left", "bumper_right", "docked")  # the flags it models
+_SURE = 1 + 1e-6  # a ray is cast unless it misses a box by more than rounding could hide
 _BUMPER_SIDE = 0.25  # radians: a hit this close to straight ahead presses both sides
 _DOCK_PAD = (0.012, 0.04)  # half-extents of the pad the charging contacts must lie on
 _DOCK_BLOCK = (0.05, 0.15)  # half-extents of the dock, behind its face
@@ -58,42 +60,41 @@ class Box:
     def __repr__(self) -> str:
         return f"Box(x={self.x}, y={self.y}, yaw={self.yaw}, hx={self.hx}, hy={self.hy})"
 
-    def local(self, px: float, py: float) -> tuple[float, float]:
-        """The point ``(px, py)`` of the map in the box's own frame."""
-        c, s = self._c, self._s
-        dx, dy = px - self.x, py - self.y
-        return c * dx + s * dy, -s * dx + c * dy
-
     def nearest(self, px: float, py: float) -> tuple[float, float]:
         """The point of the box nearest to ``(px, py)``, in the map."""
         c, s, hx, hy = self._c, self._s, self.hx, self.hy
-        dx, dy = px - self.x, py - self.y  # in the box's frame (`local`), inlined: every tick
-        lx, ly = c * dx + s * dy, -s * dx + c * dy
+        dx, dy = px - self.x, py - self.y
+        lx, ly = c * dx + s * dy, -s * dx + c * dy  # in the box's frame
         cx = -hx if lx < -hx else hx if lx > hx else lx
         cy = -hy if ly < -hy else hy if ly > hy else ly
         return self.x + c * cx - s * cy, self.y + s * cx + c * cy
 
-    def ray(self, px: float, py: float, angle: float) -> float:
-        """How far a ray from ``(px, py)`` at ``angle`` goes to meet the box (inf: never)."""
-        lx, ly = self.local(px, py)
-        near, far = _slab(0.0, math.inf, lx, math.cos(angle - self.yaw), self.hx)
-        near, far = _slab(near, far, ly, math.sin(angle - self.yaw), self.hy)
-        return near if near <= far else math.inf
+    def cast(self, ray: tuple[float, float, float, float, float], best: float) -> float:
+        """The nearer of ``best`` and where ``ray`` meets the box.
 
-
-def _slab(
-    near: float, far: float, origin: float, direction: float, half: float
-) -> tuple[float, float]:
-    """``(near, far)`` narrowed to where a ray from ``origin`` along ``direction`` is in the slab.
-
-    A ray parallel to the slab and outside it gives an empty interval (``near > far``).
-    """
-    if abs(direction) < 1e-12:
-        return (near, far) if abs(origin) <= half else (math.inf, 0.0)
-    t1, t2 = (-half - origin) / direction, (half - origin) / direction
-    if t1 > t2:
-        t1, t2 = t2, t1
-    return (t1 if t1 > near else near), (t2 if t2 < far else far)
+        ``ray`` is ``(ox, oy, angle, c, s)``: from ``(ox, oy)`` at ``angle``,
+        whose cosine and sine are ``c`` and ``s``. The ray is cut by the box's
+        two slabs; it stops once it cannot beat ``best``.
+        """
+        ox, oy, angle, c, s = ray
+        if self.yaw != 0.0:  # the ray's direction in the box's frame (a wall's is the map's)
+            c, s = math.cos(angle - self.yaw), math.sin(angle - self.yaw)
+        bc, bs = self._c, self._s
+        dx, dy = ox - self.x, oy - self.y
+        lx, ly = bc * dx + bs * dy, -bs * dx + bc * dy  # the origin in the box's frame
+        near, far = 0.0, math.inf
+        for origin, direction, half in ((lx, c, self.hx), (ly, s, self.hy)):
+            if abs(direction) < 1e-12:  # parallel to the slab: in it all along, or never
+                if abs(origin) > half:
+                    return best
+                continue
+            t1, t2 = (-half - origin) / direction, (half - origin) / direction
+            if t1 > t2:
+                t1, t2 = t2, t1
+            near, far = (t1 if t1 > near else near), (t2 if t2 < far else far)
+            if near > far or near >= best:  # the next slab only narrows (near, far)
+                return best
+        return near
 
 
 def _room(xmin: float, ymin: float, xmax: float, ymax: float) -> list[Box]:
@@ -171,12 +172,19 @@ class FakeWorld:
     ) -> None:
         self.sensors = tuple(sensors)
         self._ray_reach = max((s.reach for s in self.sensors), default=0.0)
+        # what `read_sensors` starts from: every sensor at rest, in order; then what it computes
+        self._resting = {s.key: s.resting for s in self.sensors}
+        self._flags = tuple(key for key in _FLAGS if key in self._resting)
+        self._ranges = tuple(
+            (s.key, s.bearing, s.reach) for s in self.sensors if s.kind is SensorKind.RANGE
+        )
         room = _bounds("room", room)
         obstacles = [_bounds("an obstacle", box) for box in obstacles]
         dx, dy, dyaw = _finite("dock", dock)
         depth, width = _DOCK_BLOCK
         behind = (dx - depth * math.cos(dyaw), dy - depth * math.sin(dyaw))
         self.dock = dock
+        self._dock_axes = (math.cos(dyaw), math.sin(dyaw))  # for `_docked`, at every tick
         self.boxes = [*_room(*room), Box(*behind, dyaw, depth, width)]
         self.boxes += [
             Box((a + c) / 2, (b + d) / 2, 0.0, (c - a) / 2, (d - b) / 2) for a, b, c, d in obstacles
@@ -207,6 +215,7 @@ class FakeWorld:
                 raise ValueError(msg)
         self._pose = (x, y, yaw)
         self._odom = (0.0, 0.0, 0.0)
+        self._gaps: tuple[Pose2D | None, list[tuple[float, float, float]]] = (None, [])
 
     def set_command(self, v: float, w: float) -> None:
         """Drive at ``v`` (m/s) and ``w`` (rad/s) from the next step on.
@@ -240,45 +249,71 @@ class FakeWorld:
         if self.jammed:
             return
         v, w = self.command
-        before = self._pose
-        x, y, yaw = _arc(before, v * dt, w * dt)
+        before, turn = self._pose, w * dt
+        chord = _chord(v * dt, turn)
+        x, y, yaw = _arc(before, chord, turn)
         pushed = False
+        gaps = []
         for box in self.boxes:
             nx, ny = box.nearest(x, y)
             gap = math.hypot(x - nx, y - ny)
             if 0.0 < gap < RADIUS:
                 x, y = nx + (x - nx) * RADIUS / gap, ny + (y - ny) * RADIUS / gap
                 pushed = True
+            gaps.append((nx, ny, gap))
         self._pose = (x, y, yaw)
-        if pushed:
+        if pushed:  # the gaps before the push are not those of the pose now
             self._odom = _carried(self._odom, before, self._pose)
         else:
-            self._odom = _arc(self._odom, v * dt, w * dt)
+            self._odom = _arc(self._odom, chord, turn)
+            self._gaps = (self._pose, gaps)
+
+    def _gaps_now(self) -> list[tuple[float, float, float]]:
+        """Each box's point nearest to the robot's centre, and its distance: ``(nx, ny, gap)``.
+
+        Those `step` found, if the robot has not moved since (it reads its sensors at every tick).
+        """
+        pose, gaps = self._gaps
+        if pose is self._pose:
+            return gaps
+        x, y, _ = self._pose
+        gaps = []
+        for box in self.boxes:
+            nx, ny = box.nearest(x, y)
+            gaps.append((nx, ny, math.hypot(x - nx, y - ny)))
+        return gaps
 
     def read_sensors(self) -> dict[str, object]:
         """Every reading, keyed as in ``robot.state``: each of `sensors`, then ``v`` and ``w``."""
         x, y, yaw = self._pose
         left = right = False
-        seen = []  # the boxes a range sensor's ray may reach
-        for box in self.boxes:
-            nx, ny = box.nearest(x, y)
-            gap = math.hypot(x - nx, y - ny)
+        # The boxes a range sensor's ray may reach, each with the way (mx, my) from the centre to
+        # its nearest point and that distance squared (-inf: too near to tell the way).
+        seen: list[tuple[Box, float, float, float]] = []
+        for box, (nx, ny, gap) in zip(self.boxes, self._gaps_now(), strict=True):
             if gap <= RADIUS + _CONTACT:
                 bearing = math.remainder(math.atan2(ny - y, nx - x) - yaw, math.tau)
                 left |= -_BUMPER_SIDE < bearing <= math.pi / 2
                 right |= -math.pi / 2 <= bearing < _BUMPER_SIDE
             if gap < _IR_RADIUS + self._ray_reach:
-                seen.append(box)
+                seen.append((box, nx - x, ny - y, gap * gap if gap > 1e-3 else -math.inf))
         flags = {"bumper": left or right, "bumper_left": left, "bumper_right": right}
         flags["docked"] = self._docked()
-        state: dict[str, object] = {}
-        for sensor in self.sensors:
-            if sensor.kind is SensorKind.RANGE:
-                angle = yaw + sensor.bearing
-                ox, oy = x + _IR_RADIUS * math.cos(angle), y + _IR_RADIUS * math.sin(angle)
-                state[sensor.key] = min([sensor.reach, *(box.ray(ox, oy, angle) for box in seen)])
-            else:
-                state[sensor.key] = flags.get(sensor.key, False)
+        state: dict[str, object] = dict(self._resting)  # a flag it does not model reads False
+        for key in self._flags:
+            state[key] = flags[key]
+        for key, bearing, reach in self._ranges if seen else ():  # else each reads its reach
+            angle = yaw + bearing
+            c, s = math.cos(angle), math.sin(angle)
+            ray, best = (x + _IR_RADIUS * c, y + _IR_RADIUS * s, angle, c, s), reach
+            for box, mx, my, square in seen:
+                # A box lies beyond the line square to (mx, my) through its nearest point (it is
+                # convex); the ray, from the centre's side along (c, s), meets that line at
+                # (_IR_RADIUS + t) * ((c, s) . (mx, my)) = square: one that cannot meet it
+                # within reach (with a margin for rounding) cannot meet the box, and is not cast.
+                if square < (best + _IR_RADIUS) * (c * mx + s * my) * _SURE:
+                    best = box.cast(ray, best)
+            state[key] = best
         state["v"], state["w"] = self.command
         return state
 
@@ -295,16 +330,20 @@ class FakeWorld:
 
     def _docked(self) -> bool:
         x, y, yaw = self._pose
-        dx, dy, dyaw = self.dock
+        dx, dy, _ = self.dock
         px, py = x - RADIUS * math.cos(yaw) - dx, y - RADIUS * math.sin(yaw) - dy
-        c, s = math.cos(dyaw), math.sin(dyaw)
+        c, s = self._dock_axes
         return abs(c * px + s * py) <= _DOCK_PAD[0] and abs(-s * px + c * py) <= _DOCK_PAD[1]
 
 
-def _arc(pose: Pose2D, distance: float, turn: float) -> Pose2D:
-    """``pose`` moved ``distance`` along a circular arc turning by ``turn``."""
+def _chord(distance: float, turn: float) -> float:
+    """The chord of a circular arc ``distance`` long turning by ``turn``."""
+    return distance if abs(turn) < 1e-12 else 2 * distance / turn * math.sin(turn / 2)
+
+
+def _arc(pose: Pose2D, chord: float, turn: float) -> Pose2D:
+    """``pose`` moved along a circular arc of chord ``chord`` (`_chord`) turning by ``turn``."""
     x, y, yaw = pose
-    chord = distance if abs(turn) < 1e-12 else 2 * distance / turn * math.sin(turn / 2)
     heading = yaw + turn / 2
     return (
         x + chord * math.cos(heading),

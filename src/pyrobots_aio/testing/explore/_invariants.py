@@ -98,10 +98,10 @@ class _WhileHeld(Invariant):
         since: list[float | None] = [None]
 
         def check(_: Mapping[str, Any]) -> None:
-            now = robot.time()
-            if not self.holds(robot):
+            if not self.holds(robot):  # at nearly every tick: nothing more to look at
                 since[0] = None
                 return
+            now = robot.time()
             start = since[0] = now if since[0] is None else since[0]
             # ticks land on sums of floats: a press of exactly the grace is not longer than it
             held = now - start > self.grace + 1e-9
@@ -127,7 +127,8 @@ class no_forward_into_bumper(_WhileHeld):
 
     def holds(self, robot: Robot) -> bool:
         """A front bumper is pressed."""
-        return bool(robot.state.get("bumper_left") or robot.state.get("bumper_right"))
+        state = robot.state
+        return bool(state.get("bumper_left") or state.get("bumper_right"))
 
     def breach(self, robot: Robot, now: float, since: float) -> str | None:
         """The base drives forward."""
