@@ -153,6 +153,39 @@ async def test_asyncio_as_completed_works_over_handles() -> None:
         assert robot.time() == 3.0
 
 
+@action
+async def until(robot: Robot, gate: asyncio.Future[None]) -> int:
+    await gate
+    return 1
+
+
+@pytest.mark.asyncio
+async def test_every_waiter_wakes_but_one_that_gave_up() -> None:
+    async with Robot() as robot:
+        handle = nap(robot, 2.0, 7)
+        first = asyncio.create_task(handle.wait())
+        second = asyncio.create_task(handle.wait_done())
+        with pytest.raises(TimeoutError):
+            async with asyncio.timeout(1):
+                await handle.wait_done()  # the third gives up: the two others still wait
+        assert (await first, await second) == (7, Outcome.SUCCEEDED)
+
+
+@pytest.mark.asyncio
+async def test_an_awaiter_cancelled_as_the_action_ends_is_woken_once() -> None:
+    async with Robot() as robot:
+        gate: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        handle = until(robot, gate)
+        awaiter = asyncio.create_task(handle.wait())
+        await asyncio.sleep(0)
+        gate.set_result(None)  # the body's step is queued first,
+        awaiter.cancel()  # the awaiter's wake-up second: the action ends in between
+        with pytest.raises(asyncio.CancelledError):
+            await awaiter
+        assert await handle == 1  # it ended as it would have; its end woke nobody twice
+        assert not handle.cancel_requested
+
+
 @pytest.mark.asyncio
 async def test_await_owns_the_action_but_wait_done_does_not() -> None:
     async with Robot() as robot:

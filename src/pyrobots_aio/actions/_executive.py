@@ -179,7 +179,7 @@ class Executive:
             loop is None
             or get_ident() != self.thread_ident  # running_here(loop, ...), inlined
             or not loop.is_running()
-            or (parent is None and self._closing)
+            or (self._closing and parent is None)
             or (
                 self.max_actions is not None
                 and len(self._running) >= self.max_actions

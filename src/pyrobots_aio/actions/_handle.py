@@ -46,7 +46,7 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 
 _new = object.__new__
-_Task = asyncio.Task
+_Task, _Future = asyncio.Task, asyncio.Future
 # A waiter is an asyncio.Future (the C one): its methods, called unbound, are specialized
 # calls on Python 3.11 (a bound method call on an instance with a dict slot is not).
 _done, _set_result = asyncio.Future.done, asyncio.Future.set_result
@@ -175,7 +175,8 @@ class ActionHandle(Generic[T]):
     _cancel: tuple[str | None, ActionHandle[Any] | None] | None
     """Why and by whom cancellation was requested, once it was."""
     _freeze: Freeze | None
-    _waiters: list[asyncio.Future[None]] | None
+    _waiters: asyncio.Future[None] | list[asyncio.Future[None]] | None
+    """The futures of the tasks awaiting it: one bare (the usual case), or a list of several."""
     _callbacks: list[Callable[[ActionHandle[T]], object]] | None
     _internal: list[Callable[[ActionHandle[T]], object]] | None
     _finalizers: list[Callable[[], None]] | None
@@ -249,11 +250,11 @@ class ActionHandle(Generic[T]):
             if get_ident() != self._executive.thread_ident or not loop.is_running():
                 what = f"await action {self.name}#{self.id}"  # running_here(), inlined
                 raise wrong_loop(what, loop, self._executive.thread)
-            fut: asyncio.Future[None] = asyncio.Future(loop=loop)
-            if self._waiters is None:
-                self._waiters = [fut]
+            fut: asyncio.Future[None] = _Future(loop=loop)
+            if self._waiters is None:  # (`_add_waiter`'s usual case, here without the call)
+                self._waiters = fut
             else:
-                self._waiters.append(fut)
+                self._add_waiter(fut)
             try:
                 yield from fut
             except asyncio.CancelledError:  # awaiting owns the action, as awaiting a task does
@@ -301,12 +302,19 @@ class ActionHandle(Generic[T]):
     def _waiter(self, verb: str) -> asyncio.Future[None]:
         """A future the action's end completes; the caller must be on the robot's loop."""
         self._check_here(verb)
-        fut: asyncio.Future[None] = asyncio.Future(loop=self._loop)
-        if self._waiters is None:
-            self._waiters = [fut]
-        else:
-            self._waiters.append(fut)
+        fut: asyncio.Future[None] = _Future(loop=self._loop)
+        self._add_waiter(fut)
         return fut
+
+    def _add_waiter(self, fut: asyncio.Future[None]) -> None:
+        """Count ``fut`` among the futures that the action's end completes."""
+        waiters = self._waiters
+        if waiters is None:
+            self._waiters = fut
+        elif isinstance(waiters, list):
+            waiters.append(fut)
+        else:
+            self._waiters = [waiters, fut]
 
     def _check_here(self, verb: str) -> None:
         """Raise `EventLoopError` unless the caller runs on the robot's loop.
@@ -320,8 +328,14 @@ class ActionHandle(Generic[T]):
             raise wrong_loop(what, self._loop, self._executive.thread)
 
     def _forget_waiter(self, fut: asyncio.Future[None]) -> None:
-        if not _done(fut) and self._waiters is not None:
-            self._waiters.remove(fut)
+        """``fut``'s task awaits the action no more (a done one is forgotten already)."""
+        if _done(fut):
+            return
+        waiters = self._waiters
+        if waiters is fut:
+            self._waiters = None
+        elif isinstance(waiters, list):
+            waiters.remove(fut)
 
     # -- inspecting -------------------------------------------------------
 
@@ -761,7 +775,7 @@ class ActionHandle(Generic[T]):
             else:
                 self._phase = RUNNING
                 executive = self._executive
-                clock = executive.clock
+                clock = executive.clock  # read, then called: executive.clock() looks up a method
                 self.started_at = clock()
                 if executive.instruments.items:
                     executive.started(self)
@@ -791,12 +805,12 @@ class ActionHandle(Generic[T]):
                     else:
                         self._outcome = SUCCEEDED
                         self._value = value
-            self._phase = FINISHING
-            if self._children:
+            if self._children:  # (without children, nothing runs between the body and the end)
+                self._phase = FINISHING
                 await self._reap()
-            if self._cancel is not None and self._outcome is SUCCEEDED:
-                # cancelled while its children wound up: CANCELLED (a failure is never masked)
-                self._settle(CANCELLED, error=self._interrupted())
+                if self._cancel is not None and self._outcome is SUCCEEDED:
+                    # cancelled while its children wound up: CANCELLED (a failure is never masked)
+                    self._settle(CANCELLED, error=self._interrupted())
             self._complete()
         finally:  # an abandoned action releases its resources only once its task ends
             if self._finalizers is not None:
@@ -868,10 +882,11 @@ class ActionHandle(Generic[T]):
         waiters = self._waiters
         if waiters is not None:
             self._waiters = None
-            for fut in waiters:
-                if not _done(fut):
-                    _set_result(fut, None)
-                    waiting = True
+            if isinstance(waiters, list):
+                waiting = _wake(waiters)
+            elif not _done(waiters):  # (cancelled: its task is being woken already)
+                _set_result(waiters, None)
+                waiting = True
         self._task = None  # the task's context refers back to this handle
         if self._outcome is FAILED and not waiting:
             self._report_unless_retrieved()
@@ -928,6 +943,14 @@ class ActionHandle(Generic[T]):
     def __repr__(self) -> str:
         parent = f" parent={self.parent.name}#{self.parent.id}" if self.parent else ""
         return f"<ActionHandle {self.name}#{self.id} {self.state.value}{parent}>"
+
+
+def _wake(waiters: list[asyncio.Future[None]]) -> bool:
+    """Complete the waiters still pending; return whether there was one."""
+    pending = [fut for fut in waiters if not _done(fut)]
+    for fut in pending:
+        _set_result(fut, None)
+    return bool(pending)
 
 
 def all_done(
