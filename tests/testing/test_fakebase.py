@@ -173,6 +173,26 @@ def test_a_bad_control_rate_is_refused() -> None:
         )
 
 
+def test_a_rate_so_slow_its_period_is_infinite_is_refused() -> None:
+    with pytest.raises(ValueError, match="period") as caught:
+        FakeBase(control_rate=1e-320)  # 1 / 1e-320 overflows: the world would step by inf
+    assert str(caught.value) == "period must be a positive number of seconds, got inf"
+
+
+def test_a_world_steps_only_by_finite_seconds_but_the_wheels_take_any_finite_number() -> None:
+    world = FakeWorld()
+    for dt in (math.nan, -0.1, "0.02"):
+        with pytest.raises(ValueError, match="dt"):
+            world.step(dt)  # type: ignore[arg-type]
+    world.set_command(0.1, 0.5)
+    for v, w in ((math.nan, 0.0), (0.0, math.inf), (True, 0.0)):
+        with pytest.raises(ValueError, match="must be a finite number"):
+            world.set_command(v, w)
+    assert world.command == (0.1, 0.5)  # a refused command leaves the one before
+    world.set_command(1, 0)  # an int is a number: scaled to the top wheel speed
+    assert world.command == (0.306, 0.0)
+
+
 def test_a_bad_room_obstacle_or_pose_is_refused() -> None:
     with pytest.raises(ValueError, match="room") as caught:
         FakeWorld(room=(2.0, -2.0, -2.0, 2.0))

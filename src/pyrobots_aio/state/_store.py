@@ -19,6 +19,7 @@ import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from threading import get_ident
 from typing import TYPE_CHECKING, Any
 
 from pyrobots_aio._core._loops import clock_of, running_here, wrong_loop
@@ -317,8 +318,9 @@ class StateStore(Mapping[str, Any]):
         if not changes.keys() <= self._values.keys():  # known keys are strings already
             for key in changes:
                 check_key(key)
-        if self._loop is not None and not running_here(self._loop, self._ident):
-            raise wrong_loop(f"write state keys {sorted(changes)}", self._loop, self._thread)
+        loop = self._loop  # running_here(loop, ...), inlined: a backend writes at every tick
+        if loop is not None and (get_ident() != self._ident or not loop.is_running()):
+            raise wrong_loop(f"write state keys {sorted(changes)}", loop, self._thread)
         now = self._clock()
         keys = tuple(changes)
         self._values.update(changes)

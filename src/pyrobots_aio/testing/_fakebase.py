@@ -39,6 +39,7 @@ TRACK = 0.235
 """Metres between the wheels (the simulator's, a Create 3's)."""
 TOP_WHEEL_SPEED = 0.306
 """Metres per second: the fastest a wheel turns (the simulator's, a Create 3's)."""
+_HALF_TRACK = TRACK / 2
 _IR_RADIUS = 0.165  # metres from the centre: where the range sensors' rays start
 _CONTACT = 1e-6  # metres: closer than this to a box counts as touching it
 _FLAGS = ("bumper", "bumper_left", "bumper_right", "docked")  # the flags it models
@@ -227,8 +228,9 @@ class FakeWorld:
         Raises:
             ValueError: ``v`` or ``w`` is not a finite number.
         """
-        v, w = finite("v", v), finite("w", w)
-        self.command = limit_speeds(v, w, TRACK / 2, TOP_WHEEL_SPEED)
+        if not (type(v) is float and type(w) is float and math.isfinite(v) and math.isfinite(w)):
+            v, w = finite("v", v), finite("w", w)  # (finite floats pass as they are)
+        self.command = limit_speeds(v, w, _HALF_TRACK, TOP_WHEEL_SPEED)
 
     def base_pose(self) -> Pose2D:
         """The robot's true pose ``(x, y, yaw)`` in the map."""
@@ -245,7 +247,10 @@ class FakeWorld:
         back, by what the robot really did (its wheels stalled with it).
         Jammed wheels (`jammed`) move nothing.
         """
-        dt = finite("dt", dt, low=0.0)
+        self._move(finite("dt", dt, low=0.0))
+
+    def _move(self, dt: float) -> None:
+        """`step` by ``dt``, a finite number of seconds, not negative (its backend's period)."""
         if self.jammed:
             return
         v, w = self.command
@@ -388,6 +393,7 @@ class FakeBackend(TickingBackend[FakeWorld]):
     """
 
     def __init__(self, world: FakeWorld, *, period: float) -> None:
+        period = finite("period", period, positive=True, must="a positive number of seconds")
         super().__init__(world, period=period, frames=FakeFrames(world))
         self._start = 0.0
 
@@ -398,7 +404,7 @@ class FakeBackend(TickingBackend[FakeWorld]):
 
     def advance(self) -> float:
         """Move the world by one period; the next tick is due at ``start + (ticks+1) * period``."""
-        self.world.step(self.period)
+        self.world._move(self.period)  # (the period was checked when it was set)
         return self._start + (self.ticks + 1) * self.period
 
     def __repr__(self) -> str:
