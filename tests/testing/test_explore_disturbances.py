@@ -65,6 +65,22 @@ def test_readings_are_pressed_and_held(what: Disturbance, key: str, expected: li
     assert _probe(what, lambda robot: robot.state[key]) == expected
 
 
+def test_the_world_is_read_through_the_tamper_only_while_something_is_held() -> None:
+    seen: list[tuple[bool, object]] = []
+
+    async def behaviour(robot: FakeBase) -> None:
+        robot.drive(0.1, 0.0)
+        for time in (0.9, 1.05, 1.3, 1.55, 1.9):
+            await robot.sleep(time - robot.time())
+            seen.append(("read_sensors" in vars(robot.world), robot.state["bumper"]))
+
+    hits = [Hit(Bump(hold=0.2), At(1.0)), Hit(Bump(hold=0.2), At(1.5))]
+    run = Scenario(behaviour, base=FakeBase, invariants=[]).run(hits)
+    assert (run.violations, run.error) == ([], None)
+    # shadowed from the first hold, given back once it ended, shadowed again by the second
+    assert seen == [(False, False), (True, True), (False, False), (True, True), (False, False)]
+
+
 def test_a_silent_sensor_keeps_its_last_value_while_the_others_go_on() -> None:
     seen = _probe(
         Silence("ir_left", 0.5),

@@ -214,10 +214,11 @@ class DriveBase(Robot):
         """
         goal = checked("distance", distance, bound=MAX_DISTANCE, fix=_METRES)
         top = checked("speed", speed, positive=True)
-        x0, y0, _ = self.odom_pose()
+        odom = self._drive.odom_pose  # (read at every tick: the backend's, one call less)
+        x0, y0, _ = odom()
 
         def travelled() -> float:
-            x, y, _ = self.odom_pose()
+            x, y, _ = odom()
             return math.hypot(x - x0, y - y0)
 
         def step() -> Velocity | None:
@@ -240,11 +241,12 @@ class DriveBase(Robot):
         """
         goal = checked("angle", angle, bound=MAX_TURN, fix=_RADIANS)
         top = checked("speed", speed, positive=True)
-        turned, last = 0.0, self.odom_pose()[2]
+        odom = self._drive.odom_pose  # (read at every tick: the backend's, one call less)
+        turned, last = 0.0, odom()[2]
 
         def step() -> Velocity | None:
             nonlocal turned, last
-            yaw = self.odom_pose()[2]
+            yaw = odom()[2]
             turned, last = turned + wrap_angle(yaw - last), yaw
             remaining = goal - turned
             w = ramp(remaining, top, _MIN_W)
@@ -336,7 +338,7 @@ class DriveBase(Robot):
         within half the way one more tick at ``speed`` would go. (Stopping at the
         first tick within tolerance stopped short by up to the tolerance, every time.)
         """
-        return abs(remaining) <= min(tolerance, abs(speed) * self.control_period / 2)
+        return abs(remaining) <= min(tolerance, abs(speed) * self._drive.control_period / 2)
 
     async def _steer(self, step: Step, *, until_thawed: bool = False) -> None:
         """Send the command ``step`` returns, now and after every tick, until it returns None.

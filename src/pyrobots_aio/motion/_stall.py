@@ -59,6 +59,7 @@ class StallWatch:
         "_base",
         "_command",
         "_commanded",
+        "_drive",
         "_frozen",
         "_handle",
         "_name",
@@ -75,13 +76,15 @@ class StallWatch:
 
     def __init__(self, base: DriveBase, handle: ActionHandle[Any] | None, name: str) -> None:
         self._base, self._handle, self._name = base, handle, name
+        self._drive = base.backend  # (read at every tick: the backend's own, one call less)
         self._frozen = self._frozen_time()
         self._command: Velocity = (0.0, 0.0)  # what the wheels were told at the last tick
         self._restart(*base.odom_pose())
 
     def thawed(self) -> bool:
         """Whether the action was frozen since the last tick (the watch then starts afresh)."""
-        frozen = self._frozen_time()
+        handle = self._handle  # (`_frozen_time`, inlined: at every tick)
+        frozen = 0.0 if handle is None else handle.frozen_time()
         if frozen == self._frozen:
             return False
         self._frozen, self._command = frozen, (0.0, 0.0)
@@ -94,9 +97,10 @@ class StallWatch:
             StallError: The wheels were commanded to move for the base's
                 ``stall_timeout`` seconds, and the odometry showed no progress.
         """
-        x, y, yaw = self._base.odom_pose()
+        drive = self._drive
+        x, y, yaw = drive.odom_pose()
         v, w = self._command
-        period = self._base.control_period
+        period = drive.control_period
         self._commanded = (
             self._commanded[0] + abs(v) * period,
             self._commanded[1] + abs(w) * period,

@@ -175,7 +175,11 @@ class SubscriberIndex:
         if every:
             deliveries.append((every, MappingProxyType(changes)))
         for sub, watched in routes:
-            mine = {key: changes[key] for key in watched}
+            if len(watched) == 1:  # (most watch one key: no comprehension's frame to make)
+                key = watched[0]
+                mine = {key: changes[key]}
+            else:
+                mine = {key: changes[key] for key in watched}
             deliveries.append(((sub,), MappingProxyType(mine)))
         if deliveries:
             self._run(deliveries)

@@ -65,6 +65,10 @@ class Box:
         """The point of the box nearest to ``(px, py)``, in the map."""
         c, s, hx, hy = self._c, self._s, self.hx, self.hy
         dx, dy = px - self.x, py - self.y
+        if not s:  # square to the map (a wall): c is 1, the same numbers without the products
+            cx = -hx if dx < -hx else hx if dx > hx else dx
+            cy = -hy if dy < -hy else hy if dy > hy else dy
+            return self.x + cx, self.y + cy
         lx, ly = c * dx + s * dy, -s * dx + c * dy  # in the box's frame
         cx = -hx if lx < -hx else hx if lx > hx else lx
         cy = -hy if ly < -hy else hy if ly > hy else ly

@@ -29,8 +29,7 @@ class Tamper:
         self._forced: dict[str, tuple[object, float]] = {}  # key: (value, until)
         self._silent: dict[str, float] = {}  # key: until
         self._odometry: tuple[Pose2D, float] | None = None  # frozen pose, until
-        # shadowing on the instance: this world alone, for this run alone
-        world.read_sensors, world.odom_pose = self._readings, self._odom
+        self._shadow()
 
     @classmethod
     def install(cls, robot: Robot) -> Tamper:
@@ -52,24 +51,37 @@ class Tamper:
         """The base reads ``values`` for ``seconds``."""
         until = self._robot.time() + seconds
         self._forced.update((key, (value, until)) for key, value in values.items())
+        self._shadow()
 
     def silence(self, key: str, seconds: float) -> None:
         """The base does not publish ``key`` for ``seconds``."""
         self._silent[key] = self._robot.time() + seconds
+        self._shadow()
 
     def freeze_odometry(self, seconds: float) -> None:
         """The odometry stays where it is for ``seconds``."""
         self._odometry = (self._odom_pose(), self._robot.time() + seconds)
+        self._shadow()
 
     def remove(self) -> None:
         """Give the world back its own methods."""
         for name in _SHADOWED:
             vars(self._world).pop(name, None)
 
+    def _shadow(self) -> None:
+        """Read the world through the tamper (on the instance: this world alone, this run alone)."""
+        self._world.read_sensors, self._world.odom_pose = self._readings, self._odom
+
+    def _rest(self) -> None:
+        """Give the world back its own methods while nothing is held, silenced or frozen.
+
+        The tamper then costs the ticks nothing until the next disturbance shadows them again.
+        """
+        if not (self._forced or self._silent or self._odometry):
+            self.remove()
+
     def _readings(self) -> dict[str, object]:
         readings: dict[str, object] = self._read_sensors()
-        if not (self._forced or self._silent):  # at most ticks: nothing held or silenced now
-            return readings
         now = self._robot.time()
         for key, (value, until) in list(self._forced.items()):
             if until <= now:
@@ -81,6 +93,7 @@ class Tamper:
                 del self._silent[key]
             else:
                 readings.pop(key, None)
+        self._rest()
         return readings
 
     def _odom(self) -> Pose2D:
@@ -89,4 +102,5 @@ class Tamper:
             if until > self._robot.time():
                 return pose
             self._odometry = None
+            self._rest()
         return self._odom_pose()  # type: ignore[no-any-return]
