@@ -181,11 +181,12 @@ class TickingBackend(abc.ABC, Generic[W]):
         # run before it (the loop's turn in between would only cost time); the loop turns
         # (polls I/O) at least every TICKS_PER_TURN ticks.
         virtual, world, controllers = self._virtual, self.world, self._controllers
+        state = robot.state  # (the robot's one store: it cannot be replaced)
         left = TICKS_PER_TURN
         while True:
             self.ticks += 1
             when = self.advance()
-            robot.state.write_owned(world.read_sensors())
+            state.write_owned(world.read_sensors())
             if controllers:
                 controllers.run()
             left -= 1
