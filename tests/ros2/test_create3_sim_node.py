@@ -40,7 +40,7 @@ from irobot_create_msgs.msg import (  # noqa: E402
 )
 from nav_msgs.msg import Odometry  # noqa: E402
 from rclpy.action import ActionClient  # noqa: E402
-from rclpy.qos import qos_profile_sensor_data  # noqa: E402
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data  # noqa: E402
 from test_sim_node import sim_node, stop  # noqa: E402
 
 if TYPE_CHECKING:
@@ -58,6 +58,10 @@ TOPICS = {
     "cmd_vel": "geometry_msgs/msg/Twist",
     "battery_state": "sensor_msgs/msg/BatteryState",
 }
+
+
+DEEP = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.BEST_EFFORT)
+"""A best-effort subscription that keeps what its thread has not taken yet."""
 
 
 class Goals:
@@ -79,10 +83,11 @@ class Goals:
                 ("navigate_to_position", NavigateToPosition),
             ]
         }
-        self.odometry = node.inbox(f"{NS}/odom", Odometry, qos_profile_sensor_data)
-        self.hazards = node.inbox(
-            f"{NS}/hazard_detection", HazardDetectionVector, qos_profile_sensor_data
-        )
+        # Best effort, as the node publishes them, but a deep reader history: at --rate 4 a
+        # 1.5-simulated-second bump is 0.4 s of messages, which the sensor-data profile's 5
+        # would let a reader thread held up that long (a loaded machine) overwrite unseen.
+        self.odometry = node.inbox(f"{NS}/odom", Odometry, DEEP)
+        self.hazards = node.inbox(f"{NS}/hazard_detection", HazardDetectionVector, DEEP)
         node.spin()
 
     def future(self, rclpy_future: Any) -> asyncio.Future[Any]:
