@@ -83,10 +83,12 @@ class Goals:
                 ("navigate_to_position", NavigateToPosition),
             ]
         }
-        # Best effort, as the node publishes them, but a deep reader history: at --rate 4 a
-        # 1.5-simulated-second bump is 0.4 s of messages, which the sensor-data profile's 5
-        # would let a reader thread held up that long (a loaded machine) overwrite unseen.
-        self.odometry = node.inbox(f"{NS}/odom", Odometry, DEEP)
+        # Odometry: the newest only (a test that waits for the base to stop wants what it
+        # does now, not a backlog). Hazards: every one, best effort as the node publishes
+        # them, with a deep reader history: at --rate 4 a 1.5-simulated-second bump is 0.4 s
+        # of messages, which the sensor-data profile's 5 would let a reader thread held up
+        # that long (a loaded machine) overwrite unseen.
+        self.odometry = node.inbox(f"{NS}/odom", Odometry, qos_profile_sensor_data)
         self.hazards = node.inbox(f"{NS}/hazard_detection", HazardDetectionVector, DEEP)
         node.spin()
 
