@@ -31,19 +31,19 @@ _FAILED = object()  # the result of a predicate that raised
 class _Failures:
     """Logs an evaluation error once, until an evaluation succeeds again."""
 
-    __slots__ = ("_failing", "_label")
+    __slots__ = ("_label", "failing")
 
     def __init__(self, label: str) -> None:
         self._label = label
-        self._failing = False
+        self.failing = False
 
     def failed(self, what: str) -> None:
-        if not self._failing:
-            self._failing = True
+        if not self.failing:
+            self.failing = True
             _log.exception("%s: %s failed (logged once until it succeeds again)", self._label, what)
 
     def succeeded(self) -> None:
-        self._failing = False
+        self.failing = False
 
 
 class KeySource:
@@ -98,7 +98,8 @@ class KeySource:
         except Exception:
             self._failures.failed(f"testing {value!r}")
             return False
-        self._failures.succeeded()
+        if self._failures.failing:
+            self._failures.succeeded()
         return holds
 
 

@@ -225,7 +225,8 @@ class VirtualTimeLoop(SignalSafeLoop):
         if self._ready or self._thread_jobs or self._stopping:  # type: ignore[attr-defined]
             return False
         scheduled: list[asyncio.TimerHandle] = self._scheduled  # type: ignore[attr-defined]
-        if scheduled and scheduled[0].when() <= when:
+        # (the first timer's when(), without the call: at every tick)
+        if scheduled and scheduled[0]._when <= when:  # type: ignore[attr-defined]
             return False
         self._now = max(self._now, when)
         return True

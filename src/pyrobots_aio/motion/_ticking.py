@@ -74,9 +74,12 @@ class TickingBackend(abc.ABC, Generic[W]):
         frames: The world's frames, for ``robot.poses``.
     """
 
+    control_period: float
+    """Seconds between two ticks (`period`)."""
+
     def __init__(self, world: W, *, period: float, frames: FrameProvider) -> None:
         self.world = world
-        self.period = period
+        self.period = self.control_period = period  # (an attribute: read at every tick)
         self.ticks = 0
         self._frames = frames
         self._robot: Robot | None = None
@@ -121,11 +124,6 @@ class TickingBackend(abc.ABC, Generic[W]):
     def frames(self) -> FrameProvider:
         """The world's frames."""
         return self._frames
-
-    @property
-    def control_period(self) -> float:
-        """Seconds between two ticks."""
-        return self.period
 
     def set_velocity(self, v: float, w: float) -> None:
         """Command the world's wheels."""
@@ -187,7 +185,7 @@ class TickingBackend(abc.ABC, Generic[W]):
             self.ticks += 1
             when = self.advance()
             state.write_owned(world.read_sensors())
-            if controllers:
+            if controllers._waiting:  # (its own package's: no __len__ call at every tick)
                 controllers.run()
             left -= 1
             if not left or virtual is None or not virtual.skip_ahead(when):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
@@ -43,6 +43,8 @@ class PoseManager:
 
     def __init__(self, *providers: FrameProvider) -> None:
         self._providers: list[FrameProvider] = []
+        # The first providers' `get_planar`, up to one without it (`planar`, at every tick)
+        self._planar_readers: tuple[Callable[[str], tuple[float, float, float]], ...] = ()
         for provider in providers:
             self.add_frame_provider(provider)
 
@@ -75,6 +77,7 @@ class PoseManager:
             msg = f"{provider!r} is already a frame provider of this PoseManager"
             raise PoseError(msg)
         self._providers.append(provider)
+        self._find_planar_readers()
         logger.debug("added frame provider %r", provider)
 
     def remove_frame_provider(self, provider: FrameProvider) -> None:
@@ -86,6 +89,7 @@ class PoseManager:
         for index, known in enumerate(self._providers):
             if known is provider:
                 del self._providers[index]
+                self._find_planar_readers()
                 logger.debug("removed frame provider %r", provider)
                 return
         msg = f"{provider!r} is not a frame provider of this PoseManager"
@@ -131,11 +135,8 @@ class PoseManager:
             >>> [round(v, 6) for v in poses.planar("base_link")]
             [1.0, 2.0, 0.5]
         """
-        name = frame_name(frame)
-        for provider in self._providers:
-            read = getattr(provider, "get_planar", None)
-            if read is None:
-                break  # a provider without it: the general way, in the providers' order
+        name = frame if type(frame) is str and frame else frame_name(frame)
+        for read in self._planar_readers:
             try:
                 planar: tuple[float, float, float] = read(name)
             except UnknownFrameError:
@@ -143,6 +144,15 @@ class PoseManager:
             return planar
         (r0, _, _, x), (r1, _, _, y) = self.get_transform(name)[:2].tolist()
         return (x, y, math.atan2(r1, r0))
+
+    def _find_planar_readers(self) -> None:
+        readers = []
+        for provider in self._providers:
+            read = getattr(provider, "get_planar", None)
+            if read is None:
+                break  # a provider without it: the general way, in the providers' order
+            readers.append(read)
+        self._planar_readers = tuple(readers)
 
     def get(self, raw: PoseLike, *, frame: str | None = None) -> Pose:
         """Read ``raw`` as a `Pose` in a frame that a provider knows.

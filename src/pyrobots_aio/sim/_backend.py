@@ -94,7 +94,7 @@ class SimBackend(TickingBackend[SimWorld]):
         if behind > 0:
             world.step(behind)
         self._next_step += self.steps_per_tick
-        return world.time_after(self._next_step - world.steps)
+        return world.time_at(self._next_step)
 
     async def stop(self) -> None:
         """Stop ticking (`TickingBackend.stop`); the world's clock no longer counts this robot."""

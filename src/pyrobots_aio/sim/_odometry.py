@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import math
 
-from ..lowlevel import wrap_angle
-
 __all__ = ["Odometry"]
 
 
@@ -42,4 +40,5 @@ class Odometry:
         heading = self.yaw + turn / 2
         self.x += chord * math.cos(heading)
         self.y += chord * math.sin(heading)
-        self.yaw = wrap_angle(self.yaw + turn)
+        yaw = self.yaw + turn
+        self.yaw = math.atan2(math.sin(yaw), math.cos(yaw))  # (wrap_angle, without the call)

@@ -294,8 +294,12 @@ class SimWorld:
 
         Computed from whole steps, so it equals `time` exactly once they are taken.
         """
+        return self.time_at(self._shared.steps + steps)
+
+    def time_at(self, step: int) -> float:
+        """Return what `time` reads once `steps` reads ``step`` (unless `set_time` moves it)."""
         start, at_step = self._shared.clock_start
-        return start + (self._shared.steps + steps - at_step) * self._dt
+        return start + (step - at_step) * self._dt
 
     def set_time(self, now: float) -> None:
         """Make `time` read ``now`` at the current step; it advances by `physics_dt` per step.
@@ -367,7 +371,8 @@ class SimWorld:
         Raises:
             ValueError: ``v`` or ``w`` is not a finite number.
         """
-        v, w = finite("v", v), finite("w", w)
+        if not (type(v) is float and type(w) is float and math.isfinite(v) and math.isfinite(w)):
+            v, w = finite("v", v), finite("w", w)  # (finite floats pass as they are)
         layout = self._layout
         half_track, radius = layout.track / 2, layout.wheel_radius
         v, w = limit_speeds(v, w, half_track, layout.max_wheel_speed * radius)
@@ -402,14 +407,16 @@ class SimWorld:
                 mujoco.mj_step2(model, data)
                 rest -= 1
             if rest:
-                mujoco.mj_step(model, data, nstep=rest)
+                mujoco.mj_step(model, data, rest)  # (nstep by position: a keyword costs more)
         finally:
             opt.disableflags = flags
         self._forward()
         self._shared.steps += n
+        elapsed = n * self._dt
         for robot in self._shared.robots:
-            robot._odometry.update(*robot._encoders())
-            robot._update_battery(n * self._dt)
+            readings, (left, right) = robot._readings, robot._layout.encoders
+            robot._odometry.update(readings[left], readings[right])
+            robot._update_battery(elapsed)
 
     def advance(self, dt: float) -> int:
         """Advance the physics by ``dt`` seconds and return the steps taken.
@@ -465,7 +472,16 @@ class SimWorld:
         right = s[layout.bumpers[1]] > threshold
         state: dict[str, object] = {"bumper": left or right, "bumper_left": left}
         state["bumper_right"] = right
-        for (key, index, limit), error in zip(layout.ir, self._ir_noise(), strict=True):
+        # The IR noise: one value per IR sensor, drawn `_NOISE_BLOCK` readings at a time (one
+        # call instead of one per reading): NumPy draws a block as the same sequence of values
+        # that as many small draws would give, so the readings are unchanged.
+        count, start = len(layout.ir), self._noise_used
+        if start >= len(self._noise):
+            self._noise = self._rng.normal(0.0, layout.ir_noise, count * _NOISE_BLOCK).tolist()
+            start = 0
+        self._noise_used = start + count
+        noise = self._noise[start : start + count]
+        for (key, index, limit), error in zip(layout.ir, noise, strict=True):
             distance = s[index]
             if 0.0 <= distance < limit:  # sees something: noisy, clamped to [0, limit]
                 # min(max(d, 0.0), limit) to the bit (-0.0 and NaN too), without the calls.
@@ -659,22 +675,6 @@ class SimWorld:
     def _encoders(self) -> tuple[float, float]:
         left, right = self._layout.encoders
         return self._readings[left], self._readings[right]
-
-    def _ir_noise(self) -> list[float]:
-        """The next reading's IR noise: one value per IR sensor.
-
-        Drawn from the generator `_NOISE_BLOCK` readings at a time (one call
-        instead of one per reading): NumPy draws a block as the same sequence of
-        values that as many small draws would give, so the readings are unchanged.
-        """
-        layout = self._layout
-        count = len(layout.ir)
-        if self._noise_used >= len(self._noise):
-            self._noise = self._rng.normal(0.0, layout.ir_noise, count * _NOISE_BLOCK).tolist()
-            self._noise_used = 0
-        start = self._noise_used
-        self._noise_used = start + count
-        return self._noise[start : start + count]
 
     def _update_battery(self, elapsed: float) -> None:
         layout = self._layout

@@ -68,6 +68,11 @@ class WriteLedger:
         self._latest_keys: Container[str] = ()  # those of the latest write, and its stamp
         self._latest_stamp = 0.0
 
+    @property
+    def writes(self) -> int:
+        """How many write operations were recorded (a batch is one)."""
+        return self._writes
+
     def write(self, key: str, now: float) -> None:
         """Record a write of ``key`` at ``now``."""
         self._latest_keys, self._latest_stamp = (key,), now

@@ -28,6 +28,8 @@ if TYPE_CHECKING:
 _log = logging.getLogger("pyrobots_aio.state")
 _ROUTES_KEPT = 64  # key sequences whose routing is cached (writers use a handful)
 
+_FAILED = "state subscriber %r failed on a write of %s"
+
 
 class Subscription:
     """A change callback registered with `StateStore.subscribe`; `close` it to stop.
@@ -85,7 +87,7 @@ class Subscription:
         try:
             self._callback(changes)
         except Exception:
-            _log.exception("state subscriber %r failed on a write of %s", self, sorted(changes))
+            _log.exception(_FAILED, self, sorted(changes))
 
 
 class _Group:
@@ -207,17 +209,23 @@ class SubscriberIndex:
             self._pending.extend(deliveries)
             return
         self._notifying = True
+        pending = self._pending
         try:
             for subs, changes in deliveries:
                 for sub in subs:
-                    sub.deliver(changes)
-            while self._pending:
-                subs, changes = self._pending.popleft()
+                    if not sub._closed:  # `sub.deliver(changes)`, without the call (every tick)
+                        try:
+                            sub._callback(changes)
+                        except Exception:
+                            _log.exception(_FAILED, sub, sorted(changes))
+            while pending:
+                subs, changes = pending.popleft()
                 for sub in subs:
                     sub.deliver(changes)
         finally:
             self._notifying = False
-            self._pending.clear()
+            if pending:
+                pending.clear()
 
 
 def check_key(key: object) -> None:

@@ -105,7 +105,6 @@ class StateStore(Mapping[str, Any]):
         "_subscribers",
         "_thread",
         "_values",
-        "_version",
         "_windows",
     )
 
@@ -125,8 +124,7 @@ class StateStore(Mapping[str, Any]):
         self._given_clock = clock
         self._clock = clock or _loop_time
         self._values: dict[str, Any] = {}
-        self._ledger = WriteLedger()
-        self._version = 0
+        self._ledger = WriteLedger()  # (it counts the writes: the store's version)
         self._subscribers = SubscriberIndex()
         self._windows: dict[str, MovingAverage] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -205,7 +203,7 @@ class StateStore(Mapping[str, Any]):
         The store's version counts write operations: a batch `update` is one.
         """
         if key is None:
-            return self._version
+            return self._ledger.writes
         return self.sample(key).version
 
     def require(self, *keys: str) -> None:
@@ -245,7 +243,6 @@ class StateStore(Mapping[str, Any]):
         now = self._clock()
         self._values[key] = value
         self._ledger.write(key, now)
-        self._version += 1
         self._subscribers.notify(key, value)
 
     def __setitem__(self, key: str, value: Any) -> None:
@@ -325,7 +322,6 @@ class StateStore(Mapping[str, Any]):
         keys = tuple(changes)
         self._values.update(changes)
         self._ledger.write_batch(keys, now, changes)  # O(1) for a sequence written before
-        self._version += 1
         self._subscribers.notify_batch(changes, keys)
 
     def filtered(self, name: str, value: float, window: int = 10) -> float:
@@ -399,7 +395,7 @@ class StateStore(Mapping[str, Any]):
 
     def __repr__(self) -> str:
         return (
-            f"<StateStore {len(self._values)} keys, version {self._version}: "
+            f"<StateStore {len(self._values)} keys, version {self._ledger.writes}: "
             f"{_repr.repr(self._values)}>"
         )
 

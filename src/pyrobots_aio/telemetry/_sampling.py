@@ -60,6 +60,9 @@ class StateSampler:
         self._period = period
         self.pose_frame = pose_frame
         self._robot: TelemetrySource | None = None
+        # What each write asks of the robot, bound once at `start`: the write's time, the pose.
+        self._stamp: Callable[[str], float] | None = None
+        self._planar: Callable[[str], tuple[float, float, float]] | None = None
         self._subscription: Subscription | None = None
         self._values: dict[str, object] = {}
         self._stamps: dict[str, float] = {}
@@ -73,6 +76,7 @@ class StateSampler:
         (`pose_frame` is set to None otherwise).
         """
         self._robot = robot
+        self._stamp, self._planar = robot.state.timestamp, robot.poses.planar
         frame = self.pose_frame
         self.pose_frame = frame if frame is not None and frame in robot.poses.frames() else None
         if self._watched is not None and not self._watched and self.pose_frame is None:
@@ -88,21 +92,22 @@ class StateSampler:
         if self._subscription is not None:
             self._subscription.close()
             self._subscription = None
-        self._robot = None
+        self._robot = self._stamp = self._planar = None
 
     def _on_write(self, changes: Mapping[str, object]) -> None:
         # Runs at every write of the state (every control tick of a simulated robot).
-        robot = self._robot
-        if robot is None or not changes:
+        stamp = self._stamp
+        if stamp is None or not changes:
             return
-        now = robot.state.timestamp(next(iter(changes)))
+        order = self._order
+        keys = changes if order is None else order
+        now = stamp(next(iter(changes)))
         values, stamps, period = self._values, self._stamps, self._period
         due: dict[str, object] = {}
-        order = self._order
-        for key in changes if order is None else order:
-            value = changes.get(key, _MISSING)
-            if value is _MISSING:  # a watched key this write does not have
+        for key in keys:
+            if key not in changes:  # a watched key this write does not have
                 continue
+            value = changes[key]
             old = values.get(key, _MISSING)
             if old is not _MISSING:
                 kind = type(value)
@@ -123,7 +128,7 @@ class StateSampler:
         frame = self.pose_frame
         if frame is not None and now - self._pose_stamp >= period:
             try:
-                x, y, yaw = robot.poses.planar(frame)
+                x, y, yaw = self._planar(frame)  # type: ignore[misc]  # (set with _stamp)
             except UnknownFrameError:
                 pass
             else:
