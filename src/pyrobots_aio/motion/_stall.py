@@ -108,8 +108,7 @@ class StallWatch:
         self._turned += wrap_angle(yaw - self._yaw)
         self._yaw, self._command = yaw, command
         if not (v or w) or self._progressed(math.hypot(x - self._start[0], y - self._start[1])):
-            # `_restart(x, y, yaw)`, without the call (at most ticks), _yaw set already
-            self._start, self._stalled, self._commanded, self._turned = (x, y), 0.0, (0.0, 0.0), 0.0
+            self._restart(x, y, yaw)
             return
         self._stalled += period
         if self._stalled + _SLACK >= self._base.stall_timeout:

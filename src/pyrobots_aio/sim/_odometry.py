@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from ..lowlevel import wrap_angle
+
 __all__ = ["Odometry"]
 
 
@@ -40,5 +42,4 @@ class Odometry:
         heading = self.yaw + turn / 2
         self.x += chord * math.cos(heading)
         self.y += chord * math.sin(heading)
-        yaw = self.yaw + turn
-        self.yaw = math.atan2(math.sin(yaw), math.cos(yaw))  # (wrap_angle, without the call)
+        self.yaw = wrap_angle(self.yaw + turn)

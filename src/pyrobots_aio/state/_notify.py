@@ -28,8 +28,6 @@ if TYPE_CHECKING:
 _log = logging.getLogger("pyrobots_aio.state")
 _ROUTES_KEPT = 64  # key sequences whose routing is cached (writers use a handful)
 
-_FAILED = "state subscriber %r failed on a write of %s"
-
 
 class Subscription:
     """A change callback registered with `StateStore.subscribe`; `close` it to stop.
@@ -79,15 +77,6 @@ class Subscription:
         state = " closed" if self._closed else ""
         name = getattr(self._callback, "__qualname__", type(self._callback).__qualname__)
         return f"<Subscription {name} {keys}{state}>"
-
-    def deliver(self, changes: Mapping[str, Any]) -> None:
-        """Call the callback unless closed; log what it raises."""
-        if self._closed:
-            return
-        try:
-            self._callback(changes)
-        except Exception:
-            _log.exception(_FAILED, self, sorted(changes))
 
 
 class _Group:
@@ -211,17 +200,20 @@ class SubscriberIndex:
         self._notifying = True
         pending = self._pending
         try:
-            for subs, changes in deliveries:
-                for sub in subs:
-                    if not sub._closed:  # `sub.deliver(changes)`, without the call (every tick)
+            while True:
+                for subs, changes in deliveries:
+                    for sub in subs:
+                        if sub._closed:
+                            continue
                         try:
                             sub._callback(changes)
                         except Exception:
-                            _log.exception(_FAILED, sub, sorted(changes))
-            while pending:
-                subs, changes = pending.popleft()
-                for sub in subs:
-                    sub.deliver(changes)
+                            _log.exception(
+                                "state subscriber %r failed on a write of %s", sub, sorted(changes)
+                            )
+                if not pending:
+                    break
+                deliveries = [pending.popleft()]  # what a subscriber wrote, in order
         finally:
             self._notifying = False
             if pending:
