@@ -89,9 +89,15 @@ class _Commands:
             self.qpos = self.robot.world._data.qpos.tolist()
 
 
-async def _walk(path: Path, capture: bool) -> tuple[float, float, float, _Commands | None]:
-    """Run the walk; return (sim seconds, wall s, thread CPU s, the commands if captured)."""
-    robot = SimRobot(seed=WALK_SEED)
+async def _walk(
+    path: Path, capture: bool, watchdog: bool = True
+) -> tuple[float, float, float, _Commands | None]:
+    """Run the walk; return (sim seconds, wall s, thread CPU s, the commands if captured).
+
+    Without ``watchdog``, the robot has no loop watchdog thread (whose work follows the wall
+    clock: `tests.bench.instructions` counts the walk without it).
+    """
+    robot = SimRobot(seed=WALK_SEED) if watchdog else SimRobot(seed=WALK_SEED, block_threshold=None)
     commands = _Commands(robot) if capture else None
     with JsonlRecorder(path, state_keys=RECORDED_STATE).attach(robot):
         wall, cpu = time.perf_counter(), time.thread_time()

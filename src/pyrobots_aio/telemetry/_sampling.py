@@ -59,7 +59,6 @@ class StateSampler:
         self._order = None if keys is None else tuple(sorted(keys))
         self._period = period
         self.pose_frame = pose_frame
-        self._robot: TelemetrySource | None = None
         # What each write asks of the robot, bound once at `start`: the write's time, the pose.
         self._stamp: Callable[[str], float] | None = None
         self._planar: Callable[[str], tuple[float, float, float]] | None = None
@@ -75,7 +74,6 @@ class StateSampler:
         The pose is sampled only if ``robot.poses`` knows the frame now
         (`pose_frame` is set to None otherwise).
         """
-        self._robot = robot
         self._stamp, self._planar = robot.state.timestamp, robot.poses.planar
         frame = self.pose_frame
         self.pose_frame = frame if frame is not None and frame in robot.poses.frames() else None
@@ -92,7 +90,7 @@ class StateSampler:
         if self._subscription is not None:
             self._subscription.close()
             self._subscription = None
-        self._robot = self._stamp = self._planar = None
+        self._stamp = self._planar = None
 
     def _on_write(self, changes: Mapping[str, object]) -> None:
         # Runs at every write of the state (every control tick of a simulated robot).
