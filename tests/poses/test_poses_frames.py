@@ -343,3 +343,18 @@ def test_planar_gives_get_transform_s_floor_plane_numbers(provider: type[Odometr
         assert odometry.planar_reads[:2] == ["odom", "base_link"]
     with pytest.raises(UnknownFrameError, match="'gripper'"):
         poses.planar("gripper")
+
+
+def test_planar_asks_the_providers_of_now() -> None:
+    # The manager keeps its providers' planar readers: adding or removing one renews them.
+    poses, odometry = PoseManager(), Planar()
+    odometry.base = Pose.from_euler(1.5, -2.0, 0.0, 0.0, 0.0, 2.5, "odom")
+    with pytest.raises(UnknownFrameError, match="'base_link'"):
+        poses.planar("base_link")
+    poses.add_frame_provider(odometry)
+    assert poses.planar("base_link") == pytest.approx((1.5, -2.0, 2.5))
+    assert odometry.planar_reads == ["base_link"]
+    poses.remove_frame_provider(odometry)
+    with pytest.raises(UnknownFrameError, match="'base_link'"):
+        poses.planar("base_link")
+    assert odometry.planar_reads == ["base_link"]

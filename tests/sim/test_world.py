@@ -478,6 +478,15 @@ def test_set_time_moves_the_clock_not_the_physics(world: SimWorld) -> None:
         world.set_time(math.inf)
 
 
+def test_time_at_a_step_is_what_time_reads_there(world: SimWorld) -> None:
+    world.advance(0.1)
+    world.set_time(5.01)
+    assert world.time_at(world.steps) == world.time == 5.01
+    assert world.time_at(world.steps + 10) == world.time_after(10) == 5.01 + 10 * 0.002
+    world.step(10)
+    assert world.time == world.time_at(60)
+
+
 def test_time_counts_whole_steps(world: SimWorld) -> None:
     for _ in range(500):
         world.advance(TICK)
