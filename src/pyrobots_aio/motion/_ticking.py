@@ -75,11 +75,11 @@ class TickingBackend(abc.ABC, Generic[W]):
     """
 
     control_period: float
-    """Seconds between two ticks (`period`)."""
+    """Seconds between two ticks (an attribute, not a property: read at every tick)."""
 
     def __init__(self, world: W, *, period: float, frames: FrameProvider) -> None:
         self.world = world
-        self.period = self.control_period = period  # (an attribute: read at every tick)
+        self.control_period = period
         self.ticks = 0
         self._frames = frames
         self._robot: Robot | None = None
@@ -119,6 +119,11 @@ class TickingBackend(abc.ABC, Generic[W]):
     def sensors(self) -> tuple[Sensor, ...]:
         """The world's sensors."""
         return self.world.sensors
+
+    @property
+    def period(self) -> float:
+        """Seconds between two ticks: `control_period`."""
+        return self.control_period
 
     @property
     def frames(self) -> FrameProvider:

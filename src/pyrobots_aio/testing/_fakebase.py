@@ -404,12 +404,12 @@ class FakeBackend(TickingBackend[FakeWorld]):
     def start_clock(self, now: float) -> float:
         """Count ticks from ``now``; the first is one period on."""
         self._start = now
-        return now + self.period
+        return now + self.control_period
 
     def advance(self) -> float:
         """Move the world by one period; the next tick is due at ``start + (ticks+1) * period``."""
-        self.world._move(self.period)  # (the period was checked when it was set)
-        return self._start + (self.ticks + 1) * self.period
+        self.world._move(self.control_period)  # (the period was checked when it was set)
+        return self._start + (self.ticks + 1) * self.control_period
 
     def __repr__(self) -> str:
         return f"<FakeBackend {1 / self.period:g} Hz tick {self.ticks}>"
